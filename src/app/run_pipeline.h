@@ -1,0 +1,29 @@
+#pragma once
+// Drives the stages for `fluidform run`: the only place where scene, meshes, solver and writers meet.
+#include "core/error.h"
+#include "core/progress.h"
+#include "io/scene.h"
+
+#include <filesystem>
+#include <optional>
+
+namespace ff::app {
+
+struct RunOptions {
+  std::filesystem::path out_dir = "fluidform-out";
+  std::optional<int> frames;  ///< overrides scene.output.frames
+  bool resume = false;        ///< continue from OUT/checkpoint/ if present
+};
+
+/// What a finished run reports to the CLI.
+struct RunSummary {
+  std::size_t particles = 0;
+  int frames_written = 0;
+  double mean_frame_seconds = 0.0;
+  double peak_memory_mib = 0.0;
+};
+
+/// Runs the scene into `options.out_dir`. Everything already written stays valid on any error.
+Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& options, core::Progress& progress);
+
+}  // namespace ff::app

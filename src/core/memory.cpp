@@ -1,0 +1,30 @@
+#include "core/memory.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace ff::core {
+namespace {
+// Reads one "Key:   123 kB" line of /proc/self/status.
+double status_kib(const char* key) {
+  std::FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return 0.0;
+  char line[256];
+  double kib = 0.0;
+  const std::size_t len = std::strlen(key);
+  while (std::fgets(line, sizeof line, f)) {
+    if (std::strncmp(line, key, len) == 0 && line[len] == ':') {
+      kib = std::strtod(line + len + 1, nullptr);
+      break;
+    }
+  }
+  std::fclose(f);
+  return kib;
+}
+}  // namespace
+
+double peak_rss_mib() { return status_kib("VmHWM") / 1024.0; }
+double current_rss_mib() { return status_kib("VmRSS") / 1024.0; }
+
+}  // namespace ff::core

@@ -1,0 +1,60 @@
+#include "io/atomic_file.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace ff::io {
+namespace fs = std::filesystem;
+
+Status write_file_atomic(const fs::path& path, std::span<const std::uint8_t> bytes) {
+  const fs::path tmp = path.string() + fmt::format(".tmp.{}", ::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return io_error(fmt::format("cannot write {}: {}", path.string(), std::strerror(errno)));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t w = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      const int e = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return io_error(fmt::format("cannot write {}: {}", path.string(), std::strerror(e)));
+    }
+    done += static_cast<std::size_t>(w);
+  }
+  // fdatasync so that after the rename the new name never points at unwritten blocks (crash safety).
+  if (::fdatasync(fd) != 0 || ::close(fd) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    return io_error(fmt::format("cannot write {}: {}", path.string(), std::strerror(e)));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    return io_error(fmt::format("cannot write {}: {}", path.string(), std::strerror(e)));
+  }
+  return {};
+}
+
+Status write_file_atomic(const fs::path& path, std::string_view text) {
+  return write_file_atomic(path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+}
+
+Status ensure_writable_dir(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    return io_error(fmt::format("output path {} is not a folder", dir.string()));
+  fs::create_directories(dir, ec);
+  if (ec) return io_error(fmt::format("cannot create output folder {}: {}", dir.string(), ec.message()));
+  if (!fs::is_directory(dir)) return io_error(fmt::format("output path {} is not a folder", dir.string()));
+  if (::access(dir.c_str(), W_OK) != 0)
+    return io_error(fmt::format("output folder {} is not writable: {}", dir.string(), std::strerror(errno)));
+  return {};
+}
+
+}  // namespace ff::io

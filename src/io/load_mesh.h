@@ -1,0 +1,63 @@
+#pragma once
+// Target-mesh import through Assimp (DESIGN.md "io/"): every format Assimp reads (OBJ, PLY, STL, glTF/GLB,
+// FBX, DAE, OFF, 3DS …) becomes one TriangleMesh in the file's own units, node transforms applied and all
+// meshes merged. Degenerate triangles and point/line primitives are dropped and counted (STYLE.md §6.9);
+// anything unusable is a one-line Input error naming the file (STYLE.md §6.3). Only load_mesh.cpp includes
+// Assimp.
+#include "core/error.h"
+#include "core/types.h"
+#include "io/triangle_mesh.h"
+
+#include <cstddef>
+#include <filesystem>
+
+namespace ff::io {
+
+/// The most vertices a mesh may have: indices are `Index` and kInvalidIndex is reserved (STYLE.md §4.1).
+inline constexpr std::size_t kMaxMeshVertices = std::size_t{kInvalidIndex} - 1;  // 2^32 − 2
+
+/// Scale, then rotate (degrees, about x then y then z, i.e. R = Rz*Ry*Rx), then translate:
+/// p' = R * (scale ⊙ p) + translate.
+struct MeshTransform {
+  Vec3f scale{1, 1, 1};       ///< per-axis factor, each finite and > 0
+  Vec3f rotate_deg{0, 0, 0};  ///< degrees about x, y, z (applied in that order), each finite
+  Vec3f translate{0, 0, 0};   ///< metres, each finite
+
+  /// True when apply() is exactly the identity (all fields at their defaults).
+  bool is_identity() const;
+  /// The transformed point (computed in double, stored as float).
+  Vec3f apply(const Vec3f& p) const;
+  /// First invalid field as a Param error, e.g. "transform.scale.y = 0 must be finite and > 0".
+  Status validate() const;
+};
+
+struct LoadOptions {
+  MeshTransform transform;                    ///< applied after import
+  std::size_t max_vertices = kMaxMeshVertices;  ///< refuse larger meshes (after welding), [1, 2^32 − 2]
+};
+
+/// Statistics of what import did (logged by the app).
+struct MeshLoadStats {
+  std::size_t source_meshes = 0;          ///< meshes in the file, before merging
+  std::size_t dropped_degenerate = 0;     ///< triangles with a repeated vertex or (near) zero area
+  std::size_t dropped_non_triangles = 0;  ///< point and line primitives
+};
+
+/// Reads the mesh file at `path` (any format Assimp supports) into one triangle mesh: node transforms applied,
+/// all meshes merged, identical positions welded, units kept as in the file, then `options.transform` applied.
+/// Degenerate triangles (repeated index, or |cross| ≤ 1e-12 × bbox diagonal²) and non-triangle primitives are
+/// dropped and counted in `stats` (when non-null); vertices left unreferenced are removed (order kept).
+/// Errors (one line, naming the file): Param for an invalid `options`; Input for a missing file, a directory,
+/// an unsupported or malformed file, an empty mesh, points/lines only, a non-finite vertex, only degenerate
+/// triangles, more than `options.max_vertices` vertices. Never throws.
+Result<TriangleMesh> load_mesh(const std::filesystem::path& path, const LoadOptions& options = {},
+                               MeshLoadStats* stats = nullptr);
+
+/// Applies `t` to every vertex in place. Winding is kept: the scales are > 0, so det(R·S) > 0.
+void transform_mesh(TriangleMesh& mesh, const MeshTransform& t);
+
+/// Signed enclosed volume in m³ (divergence theorem: Σ a·(b×c)/6, accumulated in double); positive for a
+/// closed mesh with outward (CCW from outside) triangles. Meaningless for open meshes.
+double signed_volume(const TriangleMesh& mesh);
+
+}  // namespace ff::io

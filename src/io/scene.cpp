@@ -1,0 +1,182 @@
+#include "io/scene.h"
+
+#include "core/params.h"
+#include "io/json_reader.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace ff::io {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+Status OutputParams::validate(std::string_view p) const {
+  FF_CHECK(core::check_range(p, "fps", fps, 1.0, 1000.0));
+  FF_CHECK(core::check_range(p, "frames", frames, 1, 1e7));
+  FF_CHECK(core::check_range(p, "checkpoint_every", checkpoint_every, 0, 1e7));
+  return {};
+}
+
+Status Scene::validate() const {
+  FF_CHECK(solver.validate());
+  FF_CHECK(domain.validate(solver.particle_radius));
+  FF_CHECK(output.validate());
+  for (std::size_t i = 0; i < fluid.size(); ++i) FF_CHECK(fluid[i].validate(fmt::format("fluid[{}]", i)));
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    const auto p = fmt::format("targets[{}]", i);
+    FF_CHECK(core::check_vec(p, "scale", targets[i].transform.scale, 1e-9, 1e9));
+    FF_CHECK(core::check_vec(p, "rotate", targets[i].transform.rotate_deg, -1e6, 1e6));
+    FF_CHECK(core::check_vec(p, "translate", targets[i].transform.translate, -1e9, 1e9));
+    FF_CHECK(core::check_range(p, "start", targets[i].start, 0.0, 1e6));
+  }
+  if (fluid.empty())
+    return param_error("scene has no fluid: add a \"fluid\" list with at least one box or sphere source");
+  return {};
+}
+
+namespace {
+
+Status read_solver(const json& j, sim::SolverParams& s) {
+  JsonObject o(j, "solver");
+  FF_CHECK(o.check_object());
+  FF_CHECK(o.get("particle_radius", s.particle_radius));
+  FF_CHECK(o.get("support_factor", s.support_factor));
+  FF_CHECK(o.get("iterations", s.iterations));
+  FF_CHECK(o.get("max_iterations", s.max_iterations));
+  FF_CHECK(o.get("max_density_error", s.max_density_error));
+  FF_CHECK(o.get("max_dt", s.max_dt));
+  FF_CHECK(o.get("cfl", s.cfl));
+  FF_CHECK(o.get("max_substeps", s.max_substeps));
+  FF_CHECK(o.get("gravity", s.gravity));
+  FF_CHECK(o.get("rest_density", s.rest_density));
+  FF_CHECK(o.get("viscosity", s.viscosity));
+  FF_CHECK(o.get("vorticity", s.vorticity));
+  FF_CHECK(o.get("epsilon", s.epsilon));
+  FF_CHECK(o.get("scorr_k", s.scorr_k));
+  FF_CHECK(o.get("scorr_n", s.scorr_n));
+  FF_CHECK(o.get("scorr_dq", s.scorr_dq));
+  return o.finish();
+}
+
+Status read_domain(const json& j, sim::Domain& d) {
+  JsonObject o(j, "domain");
+  FF_CHECK(o.check_object());
+  FF_CHECK(o.get("min", d.min));
+  FF_CHECK(o.get("max", d.max));
+  return o.finish();
+}
+
+Status read_fluid(const json& j, std::vector<sim::FluidSource>& out) {
+  if (!j.is_array()) return param_error(fmt::format("fluid: expected a list of sources, got {}", j.type_name()));
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    JsonObject o(j[i], fmt::format("fluid[{}]", i));
+    FF_CHECK(o.check_object());
+    std::string shape = "box";
+    FF_CHECK(o.get("shape", shape));
+    sim::FluidSource s;
+    if (shape == "box") {
+      s.shape = sim::FluidSource::Shape::Box;
+      if (!o.has("min") || !o.has("max")) return param_error(fmt::format("fluid[{}]: a box needs \"min\" and \"max\"", i));
+      FF_CHECK(o.get("min", s.min));
+      FF_CHECK(o.get("max", s.max));
+    } else if (shape == "sphere") {
+      s.shape = sim::FluidSource::Shape::Sphere;
+      if (!o.has("center") || !o.has("radius"))
+        return param_error(fmt::format("fluid[{}]: a sphere needs \"center\" and \"radius\"", i));
+      FF_CHECK(o.get("center", s.center));
+      FF_CHECK(o.get("radius", s.radius));
+    } else {
+      return param_error(fmt::format("fluid[{}].shape = \"{}\" is not one of: box, sphere", i, shape));
+    }
+    FF_CHECK(o.get("velocity", s.velocity));
+    FF_CHECK(o.finish());
+    out.push_back(s);
+  }
+  return {};
+}
+
+Status read_targets(const json& j, const fs::path& base, std::vector<TargetSpec>& out) {
+  if (!j.is_array()) return param_error(fmt::format("targets: expected a list of targets, got {}", j.type_name()));
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    JsonObject o(j[i], fmt::format("targets[{}]", i));
+    FF_CHECK(o.check_object());
+    TargetSpec t;
+    std::string mesh;
+    FF_CHECK(o.get("mesh", mesh));
+    if (mesh.empty()) return param_error(fmt::format("targets[{}].mesh: a mesh file is required", i));
+    t.mesh = fs::path(mesh).is_absolute() ? fs::path(mesh) : base / mesh;
+    FF_CHECK(o.get("scale", t.transform.scale, /*allow_scalar=*/true));
+    FF_CHECK(o.get("rotate", t.transform.rotate_deg));
+    FF_CHECK(o.get("translate", t.transform.translate));
+    FF_CHECK(o.get("start", t.start));
+    FF_CHECK(o.finish());
+    out.push_back(std::move(t));
+  }
+  return {};
+}
+
+Status read_output(const json& j, OutputParams& p) {
+  JsonObject o(j, "output");
+  FF_CHECK(o.check_object());
+  FF_CHECK(o.get("fps", p.fps));
+  FF_CHECK(o.get("frames", p.frames));
+  FF_CHECK(o.get("checkpoint_every", p.checkpoint_every));
+  FF_CHECK(o.get("velocity", p.velocity));
+  return o.finish();
+}
+
+}  // namespace
+
+Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::string_view source_name) {
+  json j = json::parse(text, nullptr, /*allow_exceptions=*/false, /*ignore_comments=*/true);
+  if (j.is_discarded()) {
+    // Re-parse with exceptions only to get the position of the syntax error for the message.
+    try {
+      [[maybe_unused]] const json again = json::parse(text, nullptr, true, true);
+    } catch (const json::parse_error& e) {
+      std::string what = e.what();
+      const auto colon = what.find("parse error");
+      return param_error(fmt::format("{}: invalid JSON: {}", source_name, colon == std::string::npos ? what : what.substr(colon)));
+    }
+    return param_error(fmt::format("{}: invalid JSON", source_name));
+  }
+  Scene s;
+  JsonObject root(j, "");
+  FF_CHECK(root.check_object());
+  if (const json* v = root.child("solver")) FF_CHECK(read_solver(*v, s.solver));
+  if (const json* v = root.child("domain")) FF_CHECK(read_domain(*v, s.domain));
+  if (const json* v = root.child("fluid")) FF_CHECK(read_fluid(*v, s.fluid));
+  if (const json* v = root.child("targets")) FF_CHECK(read_targets(*v, base_dir, s.targets));
+  if (const json* v = root.child("output")) FF_CHECK(read_output(*v, s.output));
+  FF_CHECK(root.finish());
+  FF_CHECK(s.validate());
+  // The resume hash covers everything that shapes the simulation; the frame count may change between runs.
+  json h = j;
+  if (h.contains("output") && h["output"].is_object()) {
+    h["output"].erase("frames");
+    if (h["output"].empty()) h.erase("output");
+  }
+  const std::string dumped = h.dump();
+  std::uint64_t hash = 14695981039346656037ull;
+  for (unsigned char c : dumped) hash = (hash ^ c) * 1099511628211ull;
+  s.hash = hash;
+  return s;
+}
+
+Result<Scene> load_scene(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return input_error(fmt::format("{}: no such scene file", file.string()));
+  if (fs::is_directory(file, ec)) return input_error(fmt::format("{}: is a folder, not a scene file", file.string()));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return input_error(fmt::format("{}: cannot read the scene file", file.string()));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  FF_TRY(Scene s, parse_scene(ss.str(), base, file.string()));
+  s.file = file;
+  return s;
+}
+
+}  // namespace ff::io

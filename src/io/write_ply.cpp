@@ -1,0 +1,112 @@
+#include "io/write_ply.h"
+
+#include "io/atomic_file.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace ff::io {
+
+static_assert(std::endian::native == std::endian::little, "PLY writer assumes a little-endian host");
+
+std::vector<std::uint8_t> encode_particles_ply(const ParticleFrameView& f) {
+  const std::size_t n = f.positions.size();
+  const bool vel = !f.velocities.empty(), tgt = !f.targets.empty();
+  std::string header = fmt::format("ply\nformat binary_little_endian 1.0\ncomment fluidform particles\n"
+                                   "element vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
+                                   n);
+  if (vel) header += "property float vx\nproperty float vy\nproperty float vz\n";
+  if (tgt) header += "property uchar target\n";
+  header += "end_header\n";
+  const std::size_t stride = 12 + (vel ? 12 : 0) + (tgt ? 1 : 0);
+  std::vector<std::uint8_t> out(header.size() + n * stride);
+  std::memcpy(out.data(), header.data(), header.size());
+  std::uint8_t* p = out.data() + header.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    std::memcpy(p, f.positions[i].data(), 12);
+    p += 12;
+    if (vel) {
+      std::memcpy(p, f.velocities[i].data(), 12);
+      p += 12;
+    }
+    if (tgt) *p++ = f.targets[i];
+  }
+  return out;
+}
+
+Status write_particles_ply(const std::filesystem::path& path, const ParticleFrameView& frame) {
+  if (!frame.velocities.empty() && frame.velocities.size() != frame.positions.size())
+    return input_error("write_particles_ply: velocity count differs from position count");
+  if (!frame.targets.empty() && frame.targets.size() != frame.positions.size())
+    return input_error("write_particles_ply: target count differs from position count");
+  const auto bytes = encode_particles_ply(frame);
+  return write_file_atomic(path, bytes);
+}
+
+Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return input_error(fmt::format("{}: cannot open", path.string()));
+  std::string line;
+  std::getline(in, line);
+  if (line != "ply") return input_error(fmt::format("{}: not a PLY file", path.string()));
+  std::size_t n = 0;
+  bool in_vertex = false, binary_le = false;
+  struct Prop { std::string name; int size; };
+  std::vector<Prop> props;
+  while (std::getline(in, line)) {
+    if (line == "end_header") break;
+    std::istringstream ls(line);
+    std::string word;
+    ls >> word;
+    if (word == "format") {
+      std::string fmt_name;
+      ls >> fmt_name;
+      binary_le = fmt_name == "binary_little_endian";
+    } else if (word == "element") {
+      std::string name;
+      ls >> name;
+      in_vertex = name == "vertex";
+      if (in_vertex) ls >> n;
+      else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", path.string(), name));
+    } else if (word == "property" && in_vertex) {
+      std::string type, name;
+      ls >> type >> name;
+      if (type == "float" || type == "float32") props.push_back({name, 4});
+      else if (type == "uchar" || type == "uint8") props.push_back({name, 1});
+      else return input_error(fmt::format("{}: unsupported property type '{}'", path.string(), type));
+    }
+  }
+  if (!binary_le) return input_error(fmt::format("{}: particle PLY must be binary_little_endian", path.string()));
+  int ix = -1, ivx = -1, itg = -1, off = 0;
+  for (const auto& p : props) {
+    if (p.name == "x") ix = off;
+    if (p.name == "vx") ivx = off;
+    if (p.name == "target") itg = off;
+    off += p.size;
+  }
+  // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply.
+  if (ix < 0) return input_error(fmt::format("{}: no x y z properties", path.string()));
+  const std::size_t stride = static_cast<std::size_t>(off);
+  std::vector<char> buf(n * stride);
+  in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+  if (static_cast<std::size_t>(in.gcount()) != buf.size())
+    return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", path.string(), in.gcount(), buf.size()));
+  ParticleFrame f;
+  f.positions.resize(n);
+  if (ivx >= 0) f.velocities.resize(n);
+  if (itg >= 0) f.targets.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const char* rec = buf.data() + i * stride;
+    std::memcpy(f.positions[i].data(), rec + ix, 12);
+    if (ivx >= 0) std::memcpy(f.velocities[i].data(), rec + ivx, 12);
+    if (itg >= 0) f.targets[i] = static_cast<std::uint8_t>(rec[itg]);
+  }
+  return f;
+}
+
+}  // namespace ff::io

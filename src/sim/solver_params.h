@@ -1,0 +1,55 @@
+#pragma once
+// Parameters of the PBF solver, the domain and the fluid sources (METHOD.md §0, §c.2), with
+// documented defaults, units and ranges. JSON keys in scene files are the field names.
+#include "core/error.h"
+#include "core/types.h"
+
+#include <string_view>
+#include <vector>
+
+namespace ff::sim {
+
+struct SolverParams {
+  float particle_radius = 0.025f;  ///< r, m; spacing d = 2r. (1e-4, 10]
+  float support_factor = 4.0f;     ///< H_p = support_factor · r (METHOD: 4r = 2d). [2.5, 8]
+  int iterations = 4;              ///< density-constraint iterations per sub-step (minimum). [1, 100]
+  int max_iterations = 30;         ///< more iterations while the mean density error exceeds max_density_error.
+                                   ///< [iterations, 1000]; = iterations for a fixed count (benchmarks)
+  float max_density_error = 0.005f;  ///< target mean compression max(ρ/ρ0 − 1, 0) (0.5 %). (0, 1]
+  float max_dt = 1.0f / 120.0f;    ///< largest sub-step, s (METHOD §0: 1/120). (0, 0.1]
+  float cfl = 0.4f;                ///< largest displacement per sub-step, in spacings d. (0, 1]
+  int max_substeps = 64;           ///< cap on sub-steps per output frame. [1, 10000]
+  Vec3f gravity{0.0f, -10.0f, 0.0f};  ///< m/s² (paper: (0, −10, 0)). components in [−1000, 1000]
+  float rest_density = 1000.0f;    ///< physical ρ0, kg/m³; the solver calibrates to the lattice sum. (0, 1e5]
+  float viscosity = 0.01f;         ///< XSPH η (paper eq. 12, acceleration form). [0, 1]
+  float vorticity = 0.0f;          ///< vorticity confinement ε_v, m/s (off by default for shape control). [0, 10]
+  float epsilon = 0.01f;           ///< λ relaxation ε as a multiple of S_0 (Σ|∇C|² at rest). (0, 100]
+  float scorr_k = 0.1f;            ///< tensile-instability strength k (s_corr / S_0). [0, 1]
+  int scorr_n = 4;                 ///< s_corr exponent n. [1, 8]
+  float scorr_dq = 0.2f;           ///< |Δq| as a multiple of H_p. (0, 1)
+
+  float spacing() const { return 2.0f * particle_radius; }
+  float support() const { return support_factor * particle_radius; }
+  /// First violation, naming `path.key`, the value and the range.
+  Status validate(std::string_view path = "solver") const;
+};
+
+/// The box the fluid lives in; walls clamp particle centres to [min + r, max − r].
+struct Domain {
+  Vec3f min{-1.0f, 0.0f, -1.0f};  ///< m
+  Vec3f max{1.0f, 2.0f, 1.0f};    ///< m; each component > min by at least 4r
+  Status validate(float particle_radius, std::string_view path = "domain") const;
+};
+
+/// A fluid source filled on the cubic lattice of spacing d at the start of the run.
+struct FluidSource {
+  enum class Shape { Box, Sphere };
+  Shape shape = Shape::Box;
+  Vec3f min{Vec3f::Zero()}, max{Vec3f::Zero()};  ///< box corners, m
+  Vec3f center{Vec3f::Zero()};                   ///< sphere centre, m
+  float radius = 0.0f;                           ///< sphere radius, m, > 0
+  Vec3f velocity{Vec3f::Zero()};                 ///< initial velocity, m/s
+  Status validate(std::string_view path) const;
+};
+
+}  // namespace ff::sim

@@ -1,0 +1,262 @@
+// End-to-end tests of the fluidform binary: outputs, exit codes, one-line errors, no partial files,
+// thread-count independence and kill -9 + --resume.
+#include "io/write_ply.h"
+#include "support/test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
+#include <fstream>
+#include <iterator>
+#include <spawn.h>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace ff {
+namespace {
+namespace fs = std::filesystem;
+
+struct Proc {
+  pid_t pid = -1;
+  fs::path err_file;
+};
+
+// Starts the binary with `args`, stderr into a file; `threads` sets OMP_NUM_THREADS when > 0.
+Proc start(const std::vector<std::string>& args, int threads = 0) {
+  static int counter = 0;
+  Proc p;
+  p.err_file = fs::temp_directory_path() / ("fluidform-e2e-stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  std::vector<std::string> argv_s{test::binary().string()};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& s : argv_s) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_s;
+  for (char** e = environ; *e; ++e)
+    if (std::string(*e).rfind("OMP_NUM_THREADS=", 0) != 0) env_s.emplace_back(*e);
+  if (threads > 0) env_s.push_back("OMP_NUM_THREADS=" + std::to_string(threads));
+  std::vector<char*> envp;
+  for (auto& s : env_s) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 2, p.err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  EXPECT_EQ(posix_spawn(&p.pid, argv[0], &fa, nullptr, argv.data(), envp.data()), 0);
+  posix_spawn_file_actions_destroy(&fa);
+  return p;
+}
+
+struct Outcome {
+  int code = -1;
+  std::string err;
+};
+
+Outcome wait(const Proc& p) {
+  int status = 0;
+  ::waitpid(p.pid, &status, 0);
+  std::ifstream in(p.err_file);
+  std::string err((std::istreambuf_iterator<char>(in)), {});
+  fs::remove(p.err_file);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), err};
+}
+
+Outcome run(const std::vector<std::string>& args, int threads = 0) { return wait(start(args, threads)); }
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+fs::path write_scene(const fs::path& dir, const std::string& json, const std::string& name = "scene.json") {
+  std::ofstream(dir / name) << json;
+  return dir / name;
+}
+
+// ~670 particles, a small dam break.
+const std::string kSmallScene = R"({
+  "solver": {"particle_radius": 0.02},
+  "domain": {"min": [0, 0, 0], "max": [0.8, 0.6, 0.32]},
+  "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.28, 0.48, 0.32]}],
+  "output": {"frames": 12, "checkpoint_every": 4}
+})";
+
+std::size_t count_lines(const std::string& s) {
+  std::size_t n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+void expect_no_temp_files(const fs::path& dir) {
+  if (!fs::exists(dir)) return;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "partial file left: " << e.path();
+}
+
+TEST(Cli, RunWritesFramesReportAndMetrics) {
+  const auto dir = test::temp_dir("run");
+  const auto scene = write_scene(dir, kSmallScene);
+  const auto r = run({"run", scene.string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (int f = 0; f <= 12; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.ply", f);
+    auto frame = io::read_particles_ply(dir / "out" / "particles" / name);
+    ASSERT_TRUE(frame.has_value()) << name;
+    EXPECT_EQ(frame->positions.size(), frame->velocities.size());
+    EXPECT_EQ(frame->positions.size(), 672u) << "7 x 12 x 8 lattice";
+  }
+  const std::string csv = read_file(dir / "out" / "metrics.csv");
+  EXPECT_EQ(csv.rfind("frame,time_s,particles,step_time_s,substeps,iterations,density_error_mean,density_error_max,peak_memory_mb", 0), 0u);
+  EXPECT_EQ(count_lines(csv), 14u) << "header + frames 0..12";
+  const std::string rep = read_file(dir / "out" / "report.json");
+  EXPECT_NE(rep.find("\"status\": \"ok\""), std::string::npos);
+  EXPECT_NE(rep.find("\"mean_step_time_s\""), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "out" / "checkpoint" / "state.ffck"));
+  expect_no_temp_files(dir / "out");
+}
+
+TEST(Cli, OneAndTwoThreadsGiveBitIdenticalFrames) {
+  const auto dir = test::temp_dir("threads");
+  const auto scene = write_scene(dir, kSmallScene);
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "t1").string()}, 1).code, 0);
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "t2").string()}, 2).code, 0);
+  for (int f : {1, 6, 12}) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.ply", f);
+    const auto a = read_file(dir / "t1" / "particles" / name), b = read_file(dir / "t2" / "particles" / name);
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << name << " differs between 1 and 2 threads";
+  }
+}
+
+TEST(Cli, KillNineThenResumeGivesTheSameFinalFrame) {
+  const auto dir = test::temp_dir("resume");
+  const std::string scene_json = R"({
+    "solver": {"particle_radius": 0.015},
+    "domain": {"min": [0, 0, 0], "max": [0.9, 0.6, 0.3]},
+    "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.3, 0.5, 0.3]}],
+    "output": {"frames": 90, "checkpoint_every": 5}
+  })";
+  const auto scene = write_scene(dir, scene_json);
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "full").string()}).code, 0);
+
+  const fs::path out = dir / "killed";
+  Proc p = start({"-q", "run", scene.string(), "-o", out.string()});
+  const fs::path ckpt = out / "checkpoint" / "state.ffck";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(ckpt) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_TRUE(fs::exists(ckpt)) << "no checkpoint appeared";
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));  // die between checkpoints
+  ASSERT_EQ(::kill(p.pid, SIGKILL), 0);
+  const auto killed = wait(p);
+  ASSERT_EQ(killed.code, 128 + SIGKILL) << "the run finished before it could be killed; make the scene longer";
+  ASSERT_FALSE(fs::exists(out / "particles" / "frame_00090.ply"));
+
+  const auto resumed = run({"run", scene.string(), "-o", out.string(), "--resume"});
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("resuming from frame"), std::string::npos) << resumed.err;
+  const auto a = read_file(dir / "full" / "particles" / "frame_00090.ply");
+  const auto b = read_file(out / "particles" / "frame_00090.ply");
+  ASSERT_FALSE(a.empty());
+  EXPECT_TRUE(a == b) << "resumed final frame differs from the uninterrupted run";
+  // metrics.csv is complete after the resume: header + frames 0..90.
+  EXPECT_EQ(count_lines(read_file(out / "metrics.csv")), 92u);
+  expect_no_temp_files(out);
+}
+
+TEST(Cli, ResumeRefusesAChangedScene) {
+  const auto dir = test::temp_dir("resume2");
+  const auto scene = write_scene(dir, kSmallScene);
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "o").string()}).code, 0);
+  std::string changed = kSmallScene;
+  changed.replace(changed.find("0.02"), 4, "0.03");
+  write_scene(dir, changed);
+  const auto r = run({"-q", "run", scene.string(), "-o", (dir / "o").string(), "--resume"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("different scene"), std::string::npos) << r.err;
+}
+
+struct BadCase {
+  std::string name, scene_json;     // scene_json empty: args are used as they are
+  std::vector<std::string> args;    // "{scene}" and "{out}" are replaced
+  int code;
+  std::string must_contain;
+};
+
+TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
+  const auto dir = test::temp_dir("bad");
+  const std::string fluid = R"("fluid":[{"shape":"box","min":[0,0,0],"max":[0.2,0.2,0.2]}])";
+  std::vector<BadCase> cases = {
+      {"broken json", R"({"fluid": [ )", {"run", "{scene}", "-o", "{out}"}, 2, "invalid JSON"},
+      {"unknown key", "{\"solver\":{\"iteratons\":3}," + fluid + "}", {"run", "{scene}", "-o", "{out}"}, 2,
+       "did you mean 'iterations'"},
+      {"negative radius", "{\"solver\":{\"particle_radius\":-1}," + fluid + "}", {"run", "{scene}", "-o", "{out}"}, 2,
+       "solver.particle_radius = -1"},
+      {"nan value", "{\"solver\":{\"viscosity\":NaN}," + fluid + "}", {"run", "{scene}", "-o", "{out}"}, 2, "invalid JSON"},
+      {"missing scene", "", {"run", "/nonexistent/scene.json", "-o", "{out}"}, 2, "no such scene file"},
+      {"scene is a folder", "", {"run", "/tmp", "-o", "{out}"}, 2, "is a folder"},
+      {"unwritable output", "{" + fluid + "}", {"run", "{scene}", "-o", "/proc/fluidform-out"}, 1, "/proc/fluidform-out"},
+      {"output is a file", "{" + fluid + "}", {"run", "{scene}", "-o", "{scene}"}, 1, "not a folder"},
+      {"missing target mesh", "{\"targets\":[{\"mesh\":\"nope.obj\"}]," + fluid + "}", {"run", "{scene}", "-o", "{out}"},
+       2, "nope.obj"},
+      {"empty target mesh", "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "empty.obj").string() + "\"}]," + fluid + "}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "empty.obj"},
+      {"nan target mesh", "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "nan_vertex.obj").string() + "\"}]," + fluid + "}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "nan_vertex.obj"},
+      {"point-only mesh", "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "points_only.obj").string() + "\"}]," + fluid + "}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "points_only.obj"},
+      {"malformed mesh", "{\"targets\":[{\"mesh\":\"/usr/share/assimp/models/invalid/malformed.obj\"}]," + fluid + "}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "malformed.obj"},
+      {"fluid outside domain", R"({"fluid":[{"shape":"box","min":[5,5,5],"max":[6,6,6]}]})", {"run", "{scene}", "-o", "{out}"},
+       2, "fluid[0]"},
+      {"too many particles", R"({"solver":{"particle_radius":0.0002},"domain":{"min":[0,0,0],"max":[2,2,2]},)" + fluid + "}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "more than the limit"},
+      {"unknown option", "", {"run", "x.json", "--bogus"}, 2, "bogus"},
+      {"frames zero", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--frames", "0"}, 2, "frames"},
+      {"no scene argument", "", {"run"}, 2, "scene"},
+  };
+  int k = 0;
+  for (const auto& c : cases) {
+    const fs::path sub = dir / std::to_string(k++);
+    fs::create_directories(sub);
+    const fs::path scene = c.scene_json.empty() ? sub / "none.json" : write_scene(sub, c.scene_json);
+    const fs::path out = sub / "out";
+    std::vector<std::string> args;
+    for (auto a : c.args) {
+      if (a == "{scene}") a = scene.string();
+      if (a == "{out}") a = out.string();
+      args.push_back(a);
+    }
+    args.insert(args.begin(), "-q");
+    const auto r = run(args);
+    EXPECT_EQ(r.code, c.code) << c.name << ": " << r.err;
+    EXPECT_EQ(count_lines(r.err), 1u) << c.name << ": stderr must be one line, got:\n" << r.err;
+    EXPECT_EQ(r.err.rfind("fluidform: error: ", 0), 0u) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.must_contain), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out / "particles" / "frame_00001.ply")) << c.name;
+    expect_no_temp_files(sub);
+  }
+}
+
+TEST(Cli, AFailedRunKeepsWhatItWroteBefore) {
+  // A first good run, then a bad scene into the same folder: the earlier frames stay intact.
+  const auto dir = test::temp_dir("keep");
+  const auto scene = write_scene(dir, kSmallScene);
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "o").string()}).code, 0);
+  const auto before = read_file(dir / "o" / "particles" / "frame_00012.ply");
+  write_scene(dir, R"({"fluid": [ )", "bad.json");
+  EXPECT_EQ(run({"-q", "run", (dir / "bad.json").string(), "-o", (dir / "o").string()}).code, 2);
+  EXPECT_EQ(read_file(dir / "o" / "particles" / "frame_00012.ply"), before);
+}
+
+}  // namespace
+}  // namespace ff

@@ -1,0 +1,124 @@
+// Fast solver checks: calibration, a resting lattice without gravity stays put, sources, walls, blow-up.
+#include "sim/pbf_solver.h"
+
+#include "sim/emitter.h"
+#include "sim/pbf_constraints.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <limits>
+
+namespace ff::sim {
+namespace {
+
+TEST(PbfSolver, RestDensityIsCalibratedToTheLattice) {
+  SolverParams sp;
+  PbfSolver solver(sp, Domain{});
+  // METHOD.md §c.1: the Poly6 lattice sum at h = 2d is 1.010 / d³.
+  EXPECT_NEAR(solver.rest_density() / sp.rest_density, 1.010, 0.002);
+  EXPECT_FLOAT_EQ(solver.particle_mass(), sp.rest_density * std::pow(sp.spacing(), 3.0f));
+  EXPECT_GT(solver.s0(), 0.0f);
+}
+
+TEST(PbfSolver, InteriorOfARestingLatticeHasZeroConstraint) {
+  SolverParams sp;
+  sp.gravity = Vec3f::Zero();
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(1.0f)};
+  ParticleSet p;
+  ASSERT_TRUE(fill_sources(std::vector<FluidSource>{{FluidSource::Shape::Box, Vec3f::Zero(), Vec3f::Constant(1.0f)}},
+                           dom, sp.particle_radius, p).ok());
+  EXPECT_EQ(p.size(), 20u * 20u * 20u);
+  PbfSolver solver(sp, dom);
+  solver.compute_densities(p);
+  double max_err = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) max_err = std::max<double>(max_err, density_constraint(p.density[i], solver.rest_density()));
+  EXPECT_LT(max_err, 1e-5) << "a resting lattice must start exactly at rest density";
+}
+
+TEST(PbfSolver, NoGravityLatticeStaysAtRest) {
+  SolverParams sp;
+  sp.gravity = Vec3f::Zero();
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(0.6f)};
+  ParticleSet p;
+  ASSERT_TRUE(fill_sources(std::vector<FluidSource>{{FluidSource::Shape::Box, Vec3f::Zero(), Vec3f::Constant(0.6f)}},
+                           dom, sp.particle_radius, p).ok());
+  const auto start = p.position;
+  const auto ids = p.id;
+  PbfSolver solver(sp, dom);
+  NoController none;
+  for (int f = 0; f < 10; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, none).has_value());
+  double max_move = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) max_move = std::max<double>(max_move, (p.position[i] - start[p.id[i]]).norm());
+  // Only s_corr acts on a full lattice at the walls: the particles may settle by a tiny fraction of d.
+  EXPECT_LT(max_move, 0.05 * sp.spacing());
+}
+
+TEST(PbfSolver, WallsKeepParticlesInsideAndCountIsConserved) {
+  SolverParams sp;
+  sp.particle_radius = 0.02f;
+  const Domain dom{Vec3f::Zero(), Vec3f(0.8f, 0.8f, 0.4f)};
+  ParticleSet p;
+  FluidSource s{FluidSource::Shape::Sphere};
+  s.center = Vec3f(0.4f, 0.5f, 0.2f);
+  s.radius = 0.15f;
+  s.velocity = Vec3f(5.0f, -3.0f, 1.0f);  // thrown hard against the walls
+  ASSERT_TRUE(fill_sources(std::vector<FluidSource>{s}, dom, sp.particle_radius, p).ok());
+  const std::size_t n = p.size();
+  EXPECT_NEAR(double(n), 4.0 / 3.0 * M_PI * std::pow(0.15 / 0.04, 3), 0.1 * double(n));
+  PbfSolver solver(sp, dom);
+  NoController none;
+  for (int f = 0; f < 30; ++f) {
+    auto st = solver.advance(p, f / 60.0, 1.0 / 60.0, none);
+    ASSERT_TRUE(st.has_value());
+    EXPECT_GE(st->substeps, 2) << "5 m/s at d = 4 cm needs CFL sub-steps";
+  }
+  ASSERT_EQ(p.size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ASSERT_TRUE((p.position[i].array() >= dom.min.array() + sp.particle_radius - 1e-6f).all());
+    ASSERT_TRUE((p.position[i].array() <= dom.max.array() - sp.particle_radius + 1e-6f).all());
+  }
+}
+
+TEST(PbfSolver, NonFiniteStateIsReportedWithTheParticleId) {
+  SolverParams sp;
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(0.5f)};
+  ParticleSet p;
+  ASSERT_TRUE(fill_sources(std::vector<FluidSource>{{FluidSource::Shape::Box, Vec3f::Zero(), Vec3f::Constant(0.3f)}},
+                           dom, sp.particle_radius, p).ok());
+  p.velocity[17] = Vec3f(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+  PbfSolver solver(sp, dom);
+  NoController none;
+  auto st = solver.advance(p, 0.0, 1.0 / 60.0, none);
+  ASSERT_FALSE(st.has_value());
+  EXPECT_EQ(st.error().kind, Error::Kind::Numerical);
+  EXPECT_NE(st.error().message.find("particle 17"), std::string::npos) << st.error().message;
+}
+
+TEST(Emitter, RefusesTooManyParticlesWithAnEstimate) {
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(10.0f)};
+  ParticleSet p;
+  auto st = fill_sources(std::vector<FluidSource>{{FluidSource::Shape::Box, Vec3f::Zero(), Vec3f::Constant(10.0f)}},
+                         dom, 0.001f, p, 1'000'000);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("about"), std::string::npos) << st.error().message;
+  EXPECT_EQ(p.size(), 0u);
+}
+
+TEST(Emitter, OverlappingSourcesShareLatticePointsAndOutsideSourceIsAnError) {
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(1.0f)};
+  ParticleSet p;
+  FluidSource a{FluidSource::Shape::Box, Vec3f::Zero(), Vec3f::Constant(0.5f)};
+  FluidSource b{FluidSource::Shape::Box, Vec3f::Constant(0.25f), Vec3f::Constant(0.75f)};
+  ASSERT_TRUE(fill_sources(std::vector<FluidSource>{a, b}, dom, 0.025f, p).ok());
+  EXPECT_EQ(p.size(), 1000u + 1000u - 125u) << "10³ + 10³ minus the 5³ shared points";
+  ParticleSet q;
+  FluidSource out{FluidSource::Shape::Box, Vec3f::Constant(2.0f), Vec3f::Constant(3.0f)};
+  auto st = fill_sources(std::vector<FluidSource>{out}, dom, 0.025f, q);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("fluid[0]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ff::sim

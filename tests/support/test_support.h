@@ -1,0 +1,28 @@
+#pragma once
+// Shared helpers for the test suite: paths to the source tree and built binary, temporary folders,
+// and procedural meshes (libigl test_common idea: families of shapes, not golden files).
+#include "io/triangle_mesh.h"
+
+#include <filesystem>
+#include <string>
+
+namespace ff::test {
+
+/// The repository root (FF_SOURCE_DIR, set by CTest).
+std::filesystem::path source_dir();
+/// tests/data inside the repository.
+std::filesystem::path data_dir();
+/// The fluidform binary (FF_BINARY, set by CTest).
+std::filesystem::path binary();
+/// A fresh empty folder under the system temp dir, unique per call.
+std::filesystem::path temp_dir(const std::string& tag);
+
+/// Closed unit-radius sphere (icosphere, `subdivisions` ≥ 0), outward CCW triangles.
+io::TriangleMesh sphere_mesh(float radius, int subdivisions);
+/// Closed axis-aligned box [lo, hi], outward CCW triangles.
+io::TriangleMesh box_mesh(const Vec3f& lo, const Vec3f& hi);
+
+/// Writes `mesh` as a Wavefront OBJ (for feeding tests through the real importer).
+void write_obj(const std::filesystem::path& path, const io::TriangleMesh& mesh);
+
+}  // namespace ff::test
