@@ -1,192 +1,298 @@
+// Mesh import through Assimp (DESIGN.md "io/"). The import runs in two phases on one Importer:
+//   1. ReadFile without post-processing, then our checks on the raw scene: some vertices, all finite, some
+//      faces. Non-finite positions must be refused before post-processing, because SpatialSort (used by
+//      JoinIdenticalVertices) std::sorts positions and NaN keys make that undefined behaviour.
+//   2. ApplyPostProcessing: validate, triangulate, keep positions only, weld identical positions, bake node
+//      transforms (merging the meshes), split by primitive type.
+// Then the triangle meshes are merged (indices offset), options.transform is applied, degenerate triangles
+// are dropped and unreferenced vertices removed. No unit or global scaling: units stay as in the file.
+// Before Assimp sees a file, OFF and PLY headers are checked against the file size (see
+// check_declared_counts: Assimp 5.2.5 allocates whatever they declare).
 #include "io/load_mesh.h"
 
-#include "core/params.h"
-
-#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/config.h>
+#include <assimp/mesh.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <exception>
 #include <fstream>
-#include <iterator>
+#include <new>
 #include <numbers>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 namespace ff::io {
+namespace {
 namespace fs = std::filesystem;
 
-bool MeshTransform::is_identity() const {
-  return scale == Vec3f::Ones() && rotate_deg == Vec3f::Zero() && translate == Vec3f::Zero();
-}
+/// A triangle is degenerate when |(b−a)×(c−a)| ≤ kDegenerateFactor × (bbox diagonal)².
+constexpr double kDegenerateFactor = 1e-12;
+/// Assimp error strings longer than this are cut (a parser may quote a whole line of the file).
+constexpr std::size_t kMaxReasonLength = 300;
+/// How much of a file check_declared_counts reads to find the OFF/PLY header.
+constexpr std::uintmax_t kHeaderBytes = 64 * 1024;
+constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
-Vec3f MeshTransform::apply(const Vec3f& p) const {
-  constexpr double kDeg = std::numbers::pi / 180.0;
-  const Eigen::Matrix3d r = (Eigen::AngleAxisd(rotate_deg.z() * kDeg, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(rotate_deg.y() * kDeg, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(rotate_deg.x() * kDeg, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-  return (r * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>()).cast<float>();
-}
+/// Phase 2 post-processing. RemoveComponent drops normals, UVs, colours and materials so that
+/// JoinIdenticalVertices welds positions across UV/normal seams (a closed model stays closed) and
+/// PreTransformVertices merges every mesh into as few as possible. No aiProcess_GlobalScale: units as in the file.
+constexpr unsigned kPostProcess = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                  aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices | aiProcess_SortByPType;
+constexpr int kRemovedComponents = aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_COLORS |
+                                   aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
+                                   aiComponent_TEXTURES | aiComponent_LIGHTS | aiComponent_CAMERAS |
+                                   aiComponent_MATERIALS;
 
-Status MeshTransform::validate() const {
-  for (int a = 0; a < 3; ++a)
-    if (!(std::isfinite(scale[a]) && scale[a] > 0.0f))
-      return param_error(fmt::format("transform.scale.{} = {} must be finite and > 0", "xyz"[a], scale[a]));
-  FF_CHECK(core::check_vec("transform", "rotate", rotate_deg, -1e9, 1e9));
-  FF_CHECK(core::check_vec("transform", "translate", translate, -1e30, 1e30));
-  return {};
-}
-
-void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {
-  if (t.is_identity()) return;
-  for (auto& v : mesh.vertices) v = t.apply(v);
-}
-
-double signed_volume(const TriangleMesh& mesh) {
-  double v = 0.0;
-  for (const auto& t : mesh.triangles) {
-    const Vec3d a = mesh.vertices[t[0]].cast<double>(), b = mesh.vertices[t[1]].cast<double>(),
-                c = mesh.vertices[t[2]].cast<double>();
-    v += a.dot(b.cross(c));
+/// `s` as one printable line: control characters (newlines, tabs …) become spaces, runs of spaces collapse,
+/// the ends are trimmed and very long text is cut.
+std::string one_line(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == ' ' || c == 0x7f) {
+      if (!out.empty() && out.back() != ' ') out.push_back(' ');
+    } else {
+      out.push_back(c);
+    }
   }
-  return v / 6.0;
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  if (out.size() > kMaxReasonLength) {
+    out.resize(kMaxReasonLength);
+    out += "...";
+  }
+  return out;
 }
 
-namespace {
-
-std::string one_line(std::string s) {
+/// The path as shown in messages: a control character in a file name must not break the one-line rule.
+std::string shown(const fs::path& path) {
+  std::string s = path.string();
   for (char& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
   return s;
 }
 
-// Assimp's text parsers read a "nan" token as some finite number (or lose sync), so a NaN-bearing text
-// file would import as a silently wrong mesh. A standalone nan token in a text file is therefore refused
-// up front. Binary files are checked on the imported floats instead.
-bool text_has_nan_token(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string buf((std::istreambuf_iterator<char>(in)), {});
-  if (buf.find('\0') != std::string::npos) return false;  // binary: NaNs survive import as real NaNs
-  auto sep = [](char c) { return std::isspace(static_cast<unsigned char>(c)) || c == ',' || c == '<' || c == '>' || c == '"' || c == '/'; };
-  for (std::size_t i = 0; i + 3 <= buf.size(); ++i) {
-    const bool start = i == 0 || sep(buf[i - 1]) || buf[i - 1] == '-' || buf[i - 1] == '+';
-    if (!start) continue;
-    if (std::tolower(buf[i]) == 'n' && std::tolower(buf[i + 1]) == 'a' && std::tolower(buf[i + 2]) == 'n' &&
-        (i + 3 == buf.size() || sep(buf[i + 3]) || buf[i + 3] == '(')) {
-      // Skip comment lines ('#' first on the line) so that prose does not trip the check.
-      const std::size_t bol = buf.rfind('\n', i);
-      const std::size_t first = buf.find_first_not_of(" \t", bol == std::string::npos ? 0 : bol + 1);
-      if (first != std::string::npos && buf[first] == '#') continue;
-      return true;
-    }
-  }
-  return false;
+Error file_error(const fs::path& path, std::string_view reason) {
+  return input_error(fmt::format("{}: {}", shown(path), reason));
 }
 
-// Assimp's OFF reader reserves the face count of the header before reading: a corrupt count costs minutes
-// and gigabytes. Each face needs at least 6 bytes of text ("3 a b c"), so an impossible count is refused.
-std::string off_header_problem(const fs::path& path, std::uintmax_t size) {
+/// The reason Assimp gave, as one line, or `fallback` when it gave none.
+std::string assimp_reason(const Assimp::Importer& importer, std::string_view fallback) {
+  std::string reason = one_line(importer.GetErrorString());
+  return reason.empty() ? std::string(fallback) : reason;
+}
+
+/// R = Rz * Ry * Rx from degrees, in double.
+Eigen::Matrix3d rotation(const Vec3f& deg) {
+  const Vec3d r = deg.cast<double>() * (std::numbers::pi / 180.0);
+  return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+bool finite(const aiVector3D& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+/// Index of the first vertex with a NaN/Inf coordinate, or kNone.
+std::size_t first_non_finite(const std::vector<Vec3f>& vertices) {
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    if (!vertices[i].allFinite()) return i;
+  return kNone;
+}
+
+// ---- header sanity (before Assimp) ----
+
+/// The decimal count `t` (digits only), saturating at UINT64_MAX; nullopt when `t` is not a count.
+std::optional<std::uint64_t> parse_count(std::string_view t) {
+  if (t.empty()) return std::nullopt;
+  std::uint64_t n = 0;
+  for (const char c : t) {
+    if (c < '0' || c > '9') return std::nullopt;
+    const auto d = static_cast<std::uint64_t>(c - '0');
+    n = n > (UINT64_MAX - d) / 10 ? UINT64_MAX : n * 10 + d;
+  }
+  return n;
+}
+
+/// Next whitespace-separated token of `s` from `i`, skipping `#` comments (OFF syntax).
+std::string_view next_token(std::string_view s, std::size_t& i) {
+  for (;;) {
+    while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+    if (i >= s.size() || s[i] != '#') break;
+    while (i < s.size() && s[i] != '\n') ++i;
+  }
+  const std::size_t b = i;
+  while (i < s.size() && !std::isspace(static_cast<unsigned char>(s[i])) && s[i] != '#') ++i;
+  return s.substr(b, i - b);
+}
+
+/// [ST][C][N][4][n]OFF, the header keyword Assimp's OFF reader accepts.
+bool is_off_keyword(std::string_view t) {
+  if (t.size() < 3 || t.substr(t.size() - 3) != "OFF") return false;
+  std::string_view p = t.substr(0, t.size() - 3);
+  for (const std::string_view prefix : {"ST", "C", "N", "4", "n"})
+    if (p.substr(0, prefix.size()) == prefix) p.remove_prefix(prefix.size());
+  return p.empty();
+}
+
+/// Assimp 5.2.5's OFF and PLY readers allocate (and zero) whatever their header declares before reading any
+/// data: invalid/OutOfMemory.off declares 353535235358 vertices and makes Assimp touch 16 GB for 30 s; a PLY
+/// header with "element vertex 300000000" grows without bound as well. Every element takes at least one byte
+/// of the file, so a declared count above the file size is refused here, before Assimp sees the file.
+Status check_declared_counts(const fs::path& path, std::uintmax_t file_size) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};  // Assimp reports the open failure
+  std::string head(static_cast<std::size_t>(std::min(file_size, kHeaderBytes)), '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const std::string_view h = head;
+  auto too_many = [&](std::uint64_t n, std::string_view what) {
+    return file_error(path,
+                      fmt::format("header declares {} {}, more than a {}-byte file can hold", n, what, file_size));
+  };
+
+  if (h.starts_with("ply\n") || h.starts_with("ply\r\n")) {  // lines "element <name> <count>" until end_header
+    std::size_t line_start = 0;
+    while (line_start < h.size()) {
+      std::size_t line_end = h.find('\n', line_start);
+      if (line_end == std::string_view::npos) line_end = h.size();
+      const std::string_view line = h.substr(line_start, line_end - line_start);
+      line_start = line_end + 1;
+      if (line.starts_with("end_header")) break;
+      if (!line.starts_with("element ")) continue;
+      std::size_t i = 8;
+      const std::string_view name = next_token(line, i);
+      if (const auto n = parse_count(next_token(line, i)); n && *n > file_size)
+        return too_many(*n, fmt::format("'{}' elements", name));
+    }
+    return {};
+  }
+
+  // OFF: optional keyword (and dimension for nOFF), then "<vertices> <faces> <edges>".
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext != ".off") return {};
-  std::ifstream in(path);
-  std::string magic;
-  double nv = 0, nf = 0;
-  if (!(in >> magic) || magic.find("OFF") == std::string::npos) return {};
-  if (!(in >> nv >> nf)) return {};
-  if (nv < 0 || nf < 0 || nv * 6.0 > double(size) || nf * 6.0 > double(size))
-    return fmt::format("the OFF header declares {} vertices and {} faces, impossible in a file of {} bytes", nv, nf, size);
+  std::size_t i = 0;
+  std::string_view t = next_token(h, i);
+  const bool keyword = is_off_keyword(t);
+  if (!keyword && ext != ".off") return {};
+  if (keyword) {
+    if (t.find('n') != std::string_view::npos) next_token(h, i);  // nOFF: the dimension comes first
+    t = next_token(h, i);
+  }
+  if (const auto n = parse_count(t); n && *n > file_size) return too_many(*n, "vertices");
+  if (const auto n = parse_count(next_token(h, i)); n && *n > file_size) return too_many(*n, "faces");
   return {};
 }
 
-}  // namespace
+// ---- scene → TriangleMesh ----
 
-Result<TriangleMesh> load_mesh(const fs::path& path, const LoadOptions& options, MeshLoadStats* stats_out) {
-  FF_CHECK(options.transform.validate());
-  const std::string name = path.string();
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return input_error(fmt::format("{}: no such file", name));
-  if (fs::is_directory(path, ec)) return input_error(fmt::format("{}: is a folder, not a mesh file", name));
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec || size == 0) return input_error(fmt::format("{}: the file is empty", name));
-  if (const std::string why = off_header_problem(path, size); !why.empty())
-    return input_error(fmt::format("{}: {}", name, why));
-  if (size < (std::uintmax_t{512} << 20) && text_has_nan_token(path))
-    return input_error(fmt::format("{}: contains a NaN coordinate", name));
-
-  Assimp::Importer importer;
-  // Points and lines are dropped by Assimp (SortByPType + RemoveComponent) only after we count them.
-  const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
-                         aiProcess_SortByPType | aiProcess_ValidateDataStructure;
-  const aiScene* scene = importer.ReadFile(path.c_str(), flags);
-  if (!scene) {
-    std::string why = one_line(importer.GetErrorString());
-    if (why.empty()) why = "unreadable or unsupported mesh file";
-    return input_error(fmt::format("{}: {}", name, why));
+/// Phase 1 checks on the raw, not yet validated scene (only counts and positions are read): there are
+/// vertices, every coordinate is finite, and there are faces. A file of bare vertices (a point cloud) gets its
+/// own message here; Assimp's validation would only say "Mesh contains no faces".
+Status check_raw_scene(const fs::path& path, const aiScene& scene, MeshLoadStats& stats) {
+  std::size_t k = 0, faces = 0;  // k: running vertex number over the file's meshes
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh* mesh = scene.mMeshes[m];
+    if (mesh == nullptr || mesh->mVertices == nullptr) continue;  // validation reports it in phase 2
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v, ++k)
+      if (!finite(mesh->mVertices[v]))
+        return file_error(path, fmt::format("vertex {} has a non-finite coordinate (NaN/Inf)", k));
+    faces += mesh->mNumFaces;
   }
-  if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || scene->mNumMeshes == 0)
-    return input_error(fmt::format("{}: contains no mesh", name));
+  if (k == 0) return file_error(path, "contains no vertices");
+  if (faces == 0) {
+    stats.dropped_non_triangles = k;  // every vertex is a point primitive
+    return file_error(path, "contains no triangles (only points/lines)");
+  }
+  return {};
+}
 
-  MeshLoadStats stats;
-  stats.source_meshes = scene->mNumMeshes;
-  TriangleMesh mesh;
-  std::size_t total_vertices = 0;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) total_vertices += scene->mMeshes[m]->mNumVertices;
-  if (total_vertices == 0) return input_error(fmt::format("{}: contains no vertices", name));
-  if (total_vertices > options.max_vertices)
-    return input_error(fmt::format("{}: {} vertices is more than the limit of {}", name, total_vertices, options.max_vertices));
-  mesh.vertices.reserve(total_vertices);
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* am = scene->mMeshes[m];
-    const auto base = static_cast<Index>(mesh.vertices.size());
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const aiVector3D& p = am->mVertices[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        return input_error(fmt::format("{}: vertex {} has a non-finite coordinate (NaN/Inf)", name, mesh.vertices.size()));
-      mesh.vertices.emplace_back(p.x, p.y, p.z);
-    }
-    for (unsigned f = 0; f < am->mNumFaces; ++f) {
-      const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices != 3) {
-        ++stats.dropped_non_triangles;
-        continue;
+/// Merges the triangle meshes of the post-processed scene (indices offset) and counts the point and line
+/// primitives, whose meshes (SortByPType split them off) are skipped with their vertices.
+Result<TriangleMesh> merged_triangles(const fs::path& path, const aiScene& scene, std::size_t max_vertices,
+                                      MeshLoadStats& stats) {
+  // Count first so that an oversized mesh is refused before anything is allocated.
+  std::size_t n_vertices = 0, n_triangles = 0, n_other = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh* mesh = scene.mMeshes[m];
+    if (mesh == nullptr || mesh->mVertices == nullptr || mesh->mFaces == nullptr) continue;
+    std::size_t tris = 0;
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) ++(mesh->mFaces[f].mNumIndices == 3 ? tris : n_other);
+    if (tris == 0) continue;
+    n_triangles += tris;
+    n_vertices += mesh->mNumVertices;
+  }
+  stats.dropped_non_triangles = n_other;
+  if (n_triangles == 0)
+    return file_error(path, n_other > 0 ? "contains no triangles (only points/lines)" : "contains no vertices");
+  if (n_vertices > max_vertices)
+    return file_error(path, fmt::format("has {} vertices, more than the limit of {}", n_vertices, max_vertices));
+
+  TriangleMesh out;
+  out.vertices.reserve(n_vertices);
+  out.triangles.reserve(n_triangles);
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh* mesh = scene.mMeshes[m];
+    if (mesh == nullptr || mesh->mVertices == nullptr || mesh->mFaces == nullptr) continue;
+    const auto base = static_cast<Index>(out.vertices.size());  // ≤ max_vertices ≤ 2^32 − 2
+    bool any = false;
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      std::array<Index, 3> t{};
+      for (unsigned c = 0; c < 3; ++c) {
+        const unsigned i = face.mIndices[c];
+        if (i >= mesh->mNumVertices)  // validation already refuses this; never index out of range regardless
+          return file_error(path, fmt::format("face {} uses vertex {} of a mesh with {}", f, i, mesh->mNumVertices));
+        t[c] = base + i;
       }
-      mesh.triangles.push_back({base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+      out.triangles.push_back(t);
+      any = true;
     }
+    if (!any) continue;
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v)
+      out.vertices.emplace_back(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
   }
-  if (mesh.triangles.empty())
-    return input_error(fmt::format("{}: contains no triangles (only points/lines)", name));
+  return out;
+}
 
-  // Drop degenerate triangles: a repeated vertex, or an area negligible against the mesh size.
-  const Aabb box = mesh.bounds();
-  const double diag2 = double(box.size().squaredNorm());
-  std::vector<std::array<Index, 3>> kept;
-  kept.reserve(mesh.triangles.size());
+/// Drops degenerate triangles (repeated index, or |cross| ≤ 1e-12 × diagonal² of the box of the referenced
+/// vertices), then removes unreferenced vertices keeping their relative order. Returns the number dropped.
+std::size_t drop_degenerate(TriangleMesh& mesh) {
+  Eigen::AlignedBox3d box;
+  for (const auto& t : mesh.triangles)
+    for (const Index i : t) box.extend(mesh.vertices[i].cast<double>());
+  const double limit = box.isEmpty() ? 0.0 : kDegenerateFactor * box.diagonal().squaredNorm();
+
+  std::size_t kept = 0;
   for (const auto& t : mesh.triangles) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      ++stats.dropped_degenerate;
-      continue;
-    }
-    const Vec3d a = mesh.vertices[t[0]].cast<double>(), b = mesh.vertices[t[1]].cast<double>(),
-                c = mesh.vertices[t[2]].cast<double>();
-    if ((b - a).cross(c - a).norm() <= 1e-12 * diag2) {
-      ++stats.dropped_degenerate;
-      continue;
-    }
-    kept.push_back(t);
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    const Vec3d a = mesh.vertices[t[0]].cast<double>();
+    const Vec3d b = mesh.vertices[t[1]].cast<double>();
+    const Vec3d c = mesh.vertices[t[2]].cast<double>();
+    if (!((b - a).cross(c - a).norm() > limit)) continue;
+    mesh.triangles[kept++] = t;
   }
-  if (kept.empty()) return input_error(fmt::format("{}: every triangle is degenerate (zero area)", name));
-  mesh.triangles.swap(kept);
+  const std::size_t dropped = mesh.triangles.size() - kept;
+  mesh.triangles.resize(kept);
 
-  // Remove vertices no triangle uses any more (points, dropped faces), keeping their order.
+  // New index = rank among the referenced vertices, so the relative order stays the same.
   std::vector<Index> remap(mesh.vertices.size(), kInvalidIndex);
   for (const auto& t : mesh.triangles)
-    for (Index i : t) remap[i] = 0;
+    for (const Index i : t) remap[i] = 0;
   Index next = 0;
   for (std::size_t i = 0; i < remap.size(); ++i)
     if (remap[i] == 0) {
@@ -196,10 +302,117 @@ Result<TriangleMesh> load_mesh(const fs::path& path, const LoadOptions& options,
   mesh.vertices.resize(next);
   for (auto& t : mesh.triangles)
     for (Index& i : t) i = remap[i];
+  return dropped;
+}
 
-  transform_mesh(mesh, options.transform);
-  if (stats_out) *stats_out = stats;
+Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& options, MeshLoadStats& stats) {
+  if (auto s = options.transform.validate(); !s.ok())
+    return param_error(fmt::format("{}: {}", shown(path), s.error().message));
+  if (!(options.max_vertices >= 1 && options.max_vertices <= kMaxMeshVertices))
+    return param_error(fmt::format("{}: max_vertices = {} is outside [1, {}]", shown(path), options.max_vertices,
+                                   kMaxMeshVertices));
+
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (st.type() == fs::file_type::not_found) return file_error(path, "no such file");
+  if (ec) return file_error(path, one_line(ec.message()));
+  if (st.type() == fs::file_type::directory) return file_error(path, "is a directory, not a mesh file");
+  if (st.type() != fs::file_type::regular) return file_error(path, "is not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (!ec && size == 0) return file_error(path, "file is empty");
+  if (!ec) FF_CHECK(check_declared_counts(path, size));
+
+  // No logger is created, so Assimp logs into its default NullLogger: nothing reaches stdout or stderr.
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kRemovedComponents);
+  // A skeleton-only file (BVH, MD5 anim …) must not turn into a mesh of bone sticks.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+
+  const aiScene* scene = importer.ReadFile(path.string(), 0);
+  if (scene == nullptr) return file_error(path, assimp_reason(importer, "cannot be read (no reason given)"));
+  stats.source_meshes = scene->mNumMeshes;
+  if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr) return file_error(path, "contains no meshes");
+  FF_CHECK(check_raw_scene(path, *scene, stats));
+
+  scene = importer.ApplyPostProcessing(kPostProcess);
+  if (scene == nullptr) return file_error(path, assimp_reason(importer, "post-processing failed (no reason given)"));
+
+  FF_TRY(TriangleMesh mesh, merged_triangles(path, *scene, options.max_vertices, stats));
+  importer.FreeScene();  // the merged copy is all that is needed from here on
+
+  if (const auto k = first_non_finite(mesh.vertices); k != kNone)  // a huge node transform can overflow
+    return file_error(path, fmt::format("vertex {} has a non-finite coordinate (NaN/Inf) after node transforms", k));
+  if (!options.transform.is_identity()) {
+    transform_mesh(mesh, options.transform);
+    if (const auto k = first_non_finite(mesh.vertices); k != kNone)
+      return file_error(path, fmt::format("vertex {} has a non-finite coordinate (NaN/Inf) after the transform", k));
+  }
+
+  // Degeneracy is judged on the final geometry (after the transform), which is what later stages see.
+  const std::size_t n_triangles = mesh.triangles.size();
+  stats.dropped_degenerate = drop_degenerate(mesh);
+  if (mesh.triangles.empty())
+    return file_error(path, fmt::format("all {} triangles are degenerate (repeated vertex or zero area)", n_triangles));
   return mesh;
+}
+
+}  // namespace
+
+bool MeshTransform::is_identity() const {
+  return scale == Vec3f::Ones() && rotate_deg == Vec3f::Zero() && translate == Vec3f::Zero();
+}
+
+Vec3f MeshTransform::apply(const Vec3f& p) const {
+  return (rotation(rotate_deg) * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>())
+      .cast<float>();
+}
+
+Status MeshTransform::validate() const {
+  static constexpr std::array<char, 3> kAxis{'x', 'y', 'z'};
+  for (int a = 0; a < 3; ++a)
+    if (!(std::isfinite(scale[a]) && scale[a] > 0.0f))
+      return param_error(fmt::format("transform.scale.{} = {} must be finite and > 0", kAxis[a], scale[a]));
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(rotate_deg[a]))
+      return param_error(fmt::format("transform.rotate.{} = {} must be finite (degrees)", kAxis[a], rotate_deg[a]));
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(translate[a]))
+      return param_error(fmt::format("transform.translate.{} = {} must be finite (metres)", kAxis[a], translate[a]));
+  return {};
+}
+
+Result<TriangleMesh> load_mesh(const fs::path& path, const LoadOptions& options, MeshLoadStats* stats) {
+  MeshLoadStats local;
+  MeshLoadStats& s = stats != nullptr ? *stats : local;
+  s = {};
+  // Assimp catches its own import errors; this keeps the no-throw promise for allocation failures in the merge
+  // and anything an importer lets through.
+  try {
+    return load_mesh_impl(path, options, s);
+  } catch (const std::bad_alloc&) {
+    return file_error(path, "out of memory while reading");
+  } catch (const std::exception& e) {
+    return file_error(path, one_line(e.what()));
+  } catch (...) {
+    return file_error(path, "unknown error while reading");
+  }
+}
+
+void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {
+  const Eigen::Matrix3d rs = rotation(t.rotate_deg) * t.scale.cast<double>().asDiagonal();
+  const Vec3d shift = t.translate.cast<double>();
+  for (auto& v : mesh.vertices) v = (rs * v.cast<double>() + shift).cast<float>();
+}
+
+double signed_volume(const TriangleMesh& mesh) {
+  double six_v = 0.0;
+  for (const auto& t : mesh.triangles) {
+    const Vec3d a = mesh.vertices[t[0]].cast<double>();
+    const Vec3d b = mesh.vertices[t[1]].cast<double>();
+    const Vec3d c = mesh.vertices[t[2]].cast<double>();
+    six_v += a.dot(b.cross(c));
+  }
+  return six_v / 6.0;
 }
 
 }  // namespace ff::io
