@@ -92,6 +92,15 @@ json scene_to_json(const io::Scene& s) {
   return j;
 }
 
+/// Mean wall-clock of the simulated frames (frame 0 is the initial state, not simulated).
+double mean_step_seconds(const std::vector<FrameRow>& rows) {
+  double total = 0.0;
+  int n = 0;
+  for (const auto& r : rows)
+    if (r.frame > 0) total += r.step_seconds, ++n;
+  return n ? total / n : 0.0;
+}
+
 fs::path frame_path(const fs::path& out, int frame) {
   return out / "particles" / fmt::format("frame_{:05d}.ply", frame);
 }
@@ -185,17 +194,12 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
     rep["status"] = status;
     if (!error.empty()) rep["error"] = error;
     rep["scene"] = scene_to_json(scene);
-    double total = 0.0;
     double peak = 0.0;
-    int simulated = 0;
-    for (const auto& r : rows) {
-      if (r.frame > 0) total += r.step_seconds, ++simulated;
-      peak = std::max(peak, r.peak_memory_mib);
-    }
+    for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
     rep["totals"] = {{"particles", particles.size()},
                      {"frames", rows.empty() ? 0 : rows.back().frame},
                      {"simulated_seconds", rows.empty() ? 0.0 : rows.back().time},
-                     {"mean_step_time_s", simulated ? total / simulated : 0.0},
+                     {"mean_step_time_s", mean_step_seconds(rows)},
                      {"peak_memory_mb", peak},
                      {"threads", core::thread_count()},
                      {"rest_density", solver.rest_density()},
@@ -239,11 +243,7 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
   RunSummary sum;
   sum.particles = particles.size();
   sum.frames_written = frames + 1;
-  double total = 0.0;
-  int n = 0;
-  for (const auto& r : rows)
-    if (r.frame > 0) total += r.step_seconds, ++n;
-  sum.mean_frame_seconds = n ? total / n : 0.0;
+  sum.mean_frame_seconds = mean_step_seconds(rows);
   sum.peak_memory_mib = core::peak_rss_mib();
   return sum;
 }

@@ -37,7 +37,9 @@ std::size_t NeighborList::bytes() const {
 }
 
 std::size_t NeighborGrid::bytes() const {
-  return (sorted_.capacity() + cell_start_.capacity() + key_.capacity() + histogram_.capacity()) * sizeof(Index);
+  return (sorted_.capacity() + cell_start_.capacity() + key_.capacity() + key_scratch_.capacity() +
+          histogram_.capacity()) *
+         sizeof(Index);
 }
 
 Vec3i NeighborGrid::cell_of(const Vec3f& p) const {
@@ -137,12 +139,12 @@ void NeighborGrid::build(std::span<const Vec3f> points) {
 
 void NeighborGrid::points_were_sorted() {
   const auto n = static_cast<std::int64_t>(sorted_.size());
-  std::vector<Index> key_sorted(key_.size());
+  key_scratch_.resize(key_.size());
   parallel_for(n, [&](std::int64_t i) {
-    key_sorted[static_cast<std::size_t>(i)] = key_[sorted_[static_cast<std::size_t>(i)]];
+    key_scratch_[static_cast<std::size_t>(i)] = key_[sorted_[static_cast<std::size_t>(i)]];
     sorted_[static_cast<std::size_t>(i)] = static_cast<Index>(i);
   });
-  key_.swap(key_sorted);
+  key_.swap(key_scratch_);
 }
 
 template <bool kSelf>

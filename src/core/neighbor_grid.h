@@ -80,6 +80,7 @@ class NeighborGrid {
   std::vector<Index> sorted_;      // point indices, grouped by cell
   std::vector<Index> cell_start_;  // size cells + 1: run of cell k is sorted_[cell_start_[k] .. cell_start_[k+1])
   std::vector<Index> key_;         // per point: its cell key (scratch kept to avoid reallocation)
+  std::vector<Index> key_scratch_; // points_were_sorted(): keys in the new order
   std::vector<Index> histogram_;   // per thread × cell counts (scratch)
 };
 

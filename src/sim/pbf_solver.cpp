@@ -60,7 +60,7 @@ void PbfSolver::search(ParticleSet& p) {
   grid_.neighbors(p.position, neighbors_);
 }
 
-void PbfSolver::densities(const ParticleSet&, std::span<const Vec3f> x, std::vector<float>& rho) const {
+void PbfSolver::densities(std::span<const Vec3f> x, std::vector<float>& rho) const {
   const float w0 = poly6_.w_zero(), m = mass_;
   const Vec3f* xs = x.data();
   parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
@@ -75,7 +75,7 @@ void PbfSolver::densities(const ParticleSet&, std::span<const Vec3f> x, std::vec
 void PbfSolver::compute_densities(ParticleSet& p) {
   p.resize(p.size());
   search(p);
-  densities(p, p.position, p.density);
+  densities(p.position, p.density);
 }
 
 // a_ext = g + XSPH viscosity in the seed's acceleration form (eq. 12, sign fixed as METHOD.md §a.4):
@@ -198,7 +198,7 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
   }
   {
     core::ScopedTimer t(times.forces);
-    densities(p, p.position, p.density);
+    densities(p.position, p.density);
     external_accelerations(p, dt);
   }
   {

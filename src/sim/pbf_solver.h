@@ -73,7 +73,7 @@ class PbfSolver {
 
  private:
   void search(ParticleSet& p);
-  void densities(const ParticleSet& p, std::span<const Vec3f> x, std::vector<float>& rho) const;
+  void densities(std::span<const Vec3f> x, std::vector<float>& rho) const;
   void external_accelerations(ParticleSet& p, float dt) const;
   void solve_iteration(ParticleSet& p);
   void clamp_to_walls(std::vector<Vec3f>& x) const;

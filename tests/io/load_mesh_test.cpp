@@ -32,7 +32,7 @@ testing::AssertionResult models_installed() {
   if (fs::is_directory(kModels / "invalid")) return testing::AssertionSuccess();
   return testing::AssertionFailure() << kModels.string()
                                      << " is missing: install Debian's assimp-testmodels (apt-get install "
-                                        "assimp-testmodels; scripts/setup.sh installs it)";
+                                        "assimp-testmodels; scripts/setup installs it)";
 }
 
 /// Structural properties every loaded mesh has.
