@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", FF_VERSION);
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "only warnings and errors");
+  app.fallthrough();  // global flags such as -q also work after the subcommand
 
   fs::path scene_file;
   ff::app::RunOptions run_opt;

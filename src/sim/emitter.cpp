@@ -87,6 +87,8 @@ Status fill_sources(std::span<const FluidSource> sources, const Domain& domain, 
                                      "or smaller than the particle spacing {} m?)",
                                      s, 2.0f * r));
   }
+  // push_back grew the arrays geometrically: give the slack back (it would count as solver memory).
+  p.for_each_array([](auto& a) { a.shrink_to_fit(); });
   return {};
 }
 

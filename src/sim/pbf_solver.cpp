@@ -2,12 +2,14 @@
 
 #include "core/parallel.h"
 #include "core/timer.h"
+#include "sim/pair_loop.h"
 #include "sim/pbf_constraints.h"
 
 #include <Eigen/Geometry>  // cross product (vorticity)
 #include <fmt/format.h>
 
 #include <cmath>
+#include <type_traits>
 
 namespace ff::sim {
 using core::parallel_for;
@@ -47,7 +49,7 @@ PbfSolver::PbfSolver(const SolverParams& params, const Domain& domain)
 }
 
 std::size_t PbfSolver::scratch_bytes() const {
-  return neighbors_.bytes() + grid_.bytes() + delta_.capacity() * sizeof(Vec3f) + omega_.capacity() * sizeof(Vec3f) +
+  return neighbors_.bytes() + grid_.bytes() + next_.capacity() * sizeof(Vec3f) + omega_.capacity() * sizeof(Vec3f) +
          reorder_scratch_.v3.capacity() * sizeof(Vec3f) + reorder_scratch_.u32.capacity() * sizeof(Index) +
          reorder_scratch_.u8.capacity() + reorder_scratch_.f32.capacity() * sizeof(float);
 }
@@ -61,14 +63,23 @@ void PbfSolver::search(ParticleSet& p) {
 }
 
 void PbfSolver::densities(std::span<const Vec3f> x, std::vector<float>& rho) const {
-  const float w0 = poly6_.w_zero(), m = mass_;
+  using namespace core::simd;
+  const float w0 = poly6_.w_zero(), m = mass_, k = poly6_.k;
   const Vec3f* xs = x.data();
+  const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
   parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
+    const auto i = static_cast<Index>(ii);
     const Vec3f xi = xs[i];
-    float s = w0;
-    for (Index j : neighbors_.of(i)) s += poly6_.w_r2((xi - xs[j]).squaredNorm());
-    rho[i] = m * s;
+    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+    __m128 sw = zero;
+    for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
+      const V3 xj = gather(xs, j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 q2 = _mm_sub_ps(h2, r2);
+      sw = _mm_add_ps(sw, select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)), _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+    });
+    rho[i] = m * (w0 + k * hsum(sw));
   });
 }
 
@@ -91,12 +102,28 @@ void PbfSolver::external_accelerations(ParticleSet& p, float dt) const {
     parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t i) { a[i] = g; });
     return;
   }
+  using namespace core::simd;
+  const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps(), mk = broadcast(m * poly6_.k);
   parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
+    const auto i = static_cast<Index>(ii);
     const Vec3f xi = x[i], vi = v[i];
-    Vec3f s = Vec3f::Zero();
-    for (Index j : neighbors_.of(i)) s += (m / rho[j] * poly6_.w_r2((xi - x[j]).squaredNorm())) * (v[j] - vi);
-    a[i] = g + c * s;
+    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+    const __m128 ux = broadcast(vi.x()), uy = broadcast(vi.y()), uz = broadcast(vi.z());
+    __m128 sx = zero, sy = zero, sz = zero;
+    for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
+      const V3 xj = gather(x, j[0], j[1], j[2], j[3]);
+      const V3 vj = gather(v, j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 q2 = _mm_sub_ps(h2, r2);
+      // (m/ρ_j) W_ij
+      const __m128 wv = select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)),
+                               _mm_div_ps(_mm_mul_ps(mk, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)), gather(rho, j[0], j[1], j[2], j[3])));
+      sx = _mm_add_ps(sx, _mm_mul_ps(wv, _mm_sub_ps(vj.x, ux)));
+      sy = _mm_add_ps(sy, _mm_mul_ps(wv, _mm_sub_ps(vj.y, uy)));
+      sz = _mm_add_ps(sz, _mm_mul_ps(wv, _mm_sub_ps(vj.z, uz)));
+    });
+    a[i] = g + c * Vec3f(hsum(sx), hsum(sy), hsum(sz));
   });
 }
 
@@ -105,60 +132,98 @@ void PbfSolver::clamp_to_walls(std::vector<Vec3f>& x) const {
   parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) { x[i] = x[i].cwiseMax(lo).cwiseMin(hi); });
 }
 
+// The two Jacobi passes run four neighbours at a time (sim/pair_loop.h). Lanes outside the support
+// (a neighbour list is built on x at the start of the sub-step, the passes use x*) or at zero distance
+// are masked off, which matches the scalar definitions: W and ∇W vanish at r ≥ h, ∇W is 0 at r = 0.
 void PbfSolver::solve_iteration(ParticleSet& p) {
+  using namespace core::simd;
   const std::size_t n = p.size();
   const Vec3f* xs = p.predicted.data();
   float* lambda = p.lambda.data();
   float* rho = p.density.data();
-  const float m = mass_, w0 = poly6_.w_zero(), m_rho0 = mass_ / rho0_, rho0 = rho0_, eps = epsilon_;
-  const float h = spiky_.h, h2 = spiky_.h2;
+  const float m = mass_, w0 = poly6_.w_zero(), rho0 = rho0_, eps = epsilon_;
+  const __m128 h = broadcast(spiky_.h), h2 = broadcast(spiky_.h2), zero = _mm_setzero_ps();
+  // ∇_j C_i = (m/ρ0) ∇W_ij with ∇W = kgrad (h − |r|)² r/|r|: one coefficient per pair times r.
+  const __m128 cgrad = broadcast(mass_ / rho0_ * spiky_.kgrad);
 
   // λ_i from the density at x* (Poly6) and the constraint gradients (Spiky).
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
+    const auto i = static_cast<Index>(ii);
     const Vec3f xi = xs[i];
-    float sum_w = w0, grad_sq = 0.0f;
-    Vec3f grad_i = Vec3f::Zero();
-    for (Index j : neighbors_.of(i)) {
-      const Vec3f r = xi - xs[j];
-      const float r2 = r.squaredNorm();
-      if (r2 >= h2) continue;
-      sum_w += poly6_.w_r2(r2);
-      const float len = std::sqrt(r2);
-      if (len <= 0.0f) continue;
-      const Vec3f g = m_rho0 * spiky_.grad(r, len);
-      grad_sq += g.squaredNorm();
-      grad_i += g;
-    }
-    rho[i] = m * sum_w;
-    lambda[i] = pbf_lambda(density_constraint(rho[i], rho0), grad_sq + grad_i.squaredNorm(), eps);
+    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+    __m128 sw = zero, g2 = zero, gx = zero, gy = zero, gz = zero;
+    for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
+      const V3 xj = gather(xs, j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 inside = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
+      const __m128 q2 = _mm_sub_ps(h2, r2);
+      sw = _mm_add_ps(sw, select(inside, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+      const __m128 len = _mm_sqrt_ps(r2);
+      const __m128 q = _mm_sub_ps(h, len);
+      const __m128 c = select(_mm_and_ps(inside, _mm_cmpgt_ps(len, zero)),
+                              _mm_div_ps(_mm_mul_ps(cgrad, _mm_mul_ps(q, q)), len));
+      g2 = _mm_add_ps(g2, _mm_mul_ps(_mm_mul_ps(c, c), r2));  // |∇_j C_i|² = c² |r|²
+      gx = _mm_add_ps(gx, _mm_mul_ps(c, rx));
+      gy = _mm_add_ps(gy, _mm_mul_ps(c, ry));
+      gz = _mm_add_ps(gz, _mm_mul_ps(c, rz));
+    });
+    rho[i] = m * (w0 + poly6_.k * hsum(sw));
+    const Vec3f grad_i(hsum(gx), hsum(gy), hsum(gz));
+    lambda[i] = pbf_lambda(density_constraint(rho[i], rho0), hsum(g2) + grad_i.squaredNorm(), eps);
   });
 
-  // Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j)
-  const float k = params_.scorr_k, inv_wdq = 1.0f / w_dq_, s0 = s0_;
-  const int sn = params_.scorr_n;
-  Vec3f* delta = delta_.data();
-  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    const Vec3f xi = xs[i];
-    const float li = lambda[i];
-    Vec3f dx = Vec3f::Zero();
-    for (Index j : neighbors_.of(i)) {
-      const Vec3f r = xi - xs[j];
-      const float r2 = r.squaredNorm();
-      if (r2 >= h2) continue;
-      const float len = std::sqrt(r2);
-      if (len <= 0.0f) continue;
-      const float scorr = k > 0.0f ? pbf_scorr(poly6_.w_r2(r2) * inv_wdq, k, sn, s0) : 0.0f;
-      const float q = h - len;
-      // Spiky gradient inlined: ∇W = kgrad (h − |r|)² r/|r|.
-      dx += ((li + lambda[j] + scorr) * spiky_.kgrad * q * q / len) * r;
-    }
-    delta[i] = m_rho0 * dx;
-  });
-  Vec3f* xw = p.predicted.data();
+  // Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j),  s_corr = −k (W/W(Δq))ⁿ / S_0.
+  // The exponent is a compile-time constant in the loop (kN; 0 = no s_corr), so the power unrolls.
+  const __m128 w_ratio = broadcast(poly6_.k / w_dq_), scorr_c = broadcast(-params_.scorr_k / s0_);
+  const __m128 kgrad = broadcast(spiky_.kgrad), one = broadcast(1.0f);
+  const float m_rho0 = mass_ / rho0_;
   const Vec3f lo = wall_lo_, hi = wall_hi_;
-  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) { xw[i] = (xw[i] + delta[i]).cwiseMax(lo).cwiseMin(hi); });
+  // Jacobi: the corrected positions go to a second buffer, which then becomes x*.
+  Vec3f* next = next_.data();
+  auto positions = [&](auto kN) {
+    constexpr int N = decltype(kN)::value;
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
+      const auto i = static_cast<Index>(ii);
+      const Vec3f xi = xs[i];
+      const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z()), li = broadcast(lambda[i]);
+      __m128 dx = zero, dy = zero, dz = zero;
+      for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
+        const V3 xj = gather(xs, j[0], j[1], j[2], j[3]);
+        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+        const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+        const __m128 len = _mm_sqrt_ps(r2);
+        const __m128 use = _mm_and_ps(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)), _mm_cmpgt_ps(len, zero));
+        // 1/|r| depends only on r: dividing early keeps the division off the λ_j / s_corr chain.
+        const __m128 inv_len = _mm_div_ps(one, len);
+        __m128 l = _mm_add_ps(li, gather(lambda, j[0], j[1], j[2], j[3]));
+        if constexpr (N > 0) {
+          const __m128 q2 = _mm_sub_ps(h2, r2);
+          const __m128 ratio = _mm_mul_ps(w_ratio, _mm_mul_ps(_mm_mul_ps(q2, q2), q2));
+          l = _mm_add_ps(l, _mm_mul_ps(scorr_c, pow_int(ratio, N)));
+        }
+        const __m128 q = _mm_sub_ps(h, len);
+        const __m128 c = select(use, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(l, kgrad), _mm_mul_ps(q, q)), inv_len));
+        dx = _mm_add_ps(dx, _mm_mul_ps(c, rx));
+        dy = _mm_add_ps(dy, _mm_mul_ps(c, ry));
+        dz = _mm_add_ps(dz, _mm_mul_ps(c, rz));
+      });
+      next[i] = (xi + m_rho0 * Vec3f(hsum(dx), hsum(dy), hsum(dz))).cwiseMax(lo).cwiseMin(hi);
+    });
+  };
+  const int sn = params_.scorr_k > 0.0f ? params_.scorr_n : 0;
+  switch (sn) {  // validate() keeps n in [1, 8]
+    case 0: positions(std::integral_constant<int, 0>{}); break;
+    case 1: positions(std::integral_constant<int, 1>{}); break;
+    case 2: positions(std::integral_constant<int, 2>{}); break;
+    case 3: positions(std::integral_constant<int, 3>{}); break;
+    case 4: positions(std::integral_constant<int, 4>{}); break;
+    case 5: positions(std::integral_constant<int, 5>{}); break;
+    case 6: positions(std::integral_constant<int, 6>{}); break;
+    case 7: positions(std::integral_constant<int, 7>{}); break;
+    default: positions(std::integral_constant<int, 8>{}); break;
+  }
+  p.predicted.swap(next_);
 }
 
 // Vorticity confinement (Fedkiw 2001 as used by PBF): ω_i = Σ (m/ρ_j)(v_j − v_i) × ∇W_ij,
@@ -193,7 +258,7 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
   {
     core::ScopedTimer t(times.neighbors);
     p.resize(n);
-    delta_.resize(n);
+    next_.resize(n);
     search(p);
   }
   {

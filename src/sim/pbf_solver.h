@@ -88,7 +88,7 @@ class PbfSolver {
   core::NeighborGrid grid_;
   core::NeighborList neighbors_;
   ReorderScratch reorder_scratch_;
-  std::vector<Vec3f> delta_;       // Δx of the current iteration (Jacobi)
+  std::vector<Vec3f> next_;        // x* after the current iteration (Jacobi double buffer)
   std::vector<Vec3f> omega_;       // vorticity (only when enabled)
 };
 

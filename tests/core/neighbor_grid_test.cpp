@@ -94,7 +94,46 @@ TEST(NeighborGrid, SortedOrderThenNeighborsStillExact) {
   grid.points_were_sorted();
   NeighborList nl;
   grid.neighbors(p, nl);
+  EXPECT_TRUE(nl.compact) << "points in cell order must get 16-bit lists";
   expect_equal(nl, brute_force(p, p, 0.06f, true));
+}
+
+TEST(NeighborGrid, CompactAndWideListsAgreeInOrder) {
+  auto p = random_points(4000, 0.8f, 9);
+  NeighborGrid grid(0.07f);
+  grid.build(p);
+  std::vector<Vec3f> scratch;
+  apply_permutation(p, std::span<const Index>(grid.sorted()), scratch);
+  grid.build(p);  // same order again, but not declared sorted: wide lists
+  NeighborList wide;
+  grid.neighbors(p, wide);
+  EXPECT_FALSE(wide.compact);
+  grid.points_were_sorted();
+  NeighborList compact;
+  grid.neighbors(p, compact);
+  ASSERT_TRUE(compact.compact);
+  EXPECT_LT(compact.bytes(), wide.bytes());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const auto a = wide.of(i), b = compact.of(i);
+    ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end())) << "point " << i;
+  }
+}
+
+TEST(NeighborGrid, DenseClumpFallsBackToWideListsAndStaysExact) {
+  // 2000 points inside one cell: a row holds more than 12-bit offsets can address.
+  auto p = random_points(2000, 0.01f, 10);
+  const auto spread = random_points(500, 1.0f, 11);
+  p.insert(p.end(), spread.begin(), spread.end());
+  NeighborGrid grid(0.05f);
+  grid.build(p);
+  std::vector<Vec3f> scratch;
+  apply_permutation(p, std::span<const Index>(grid.sorted()), scratch);
+  grid.points_were_sorted();
+  EXPECT_GE(grid.max_cell_points(), 2000u);
+  NeighborList nl;
+  grid.neighbors(p, nl);
+  EXPECT_FALSE(nl.compact);
+  expect_equal(nl, brute_force(p, p, 0.05f, true));
 }
 
 TEST(NeighborGrid, ListsIndependentOfThreadCount) {
