@@ -2,7 +2,11 @@
 // Exit codes: 0 ok, 2 bad input or usage, 1 runtime failure. Errors are one line on stderr.
 #include "app/progress_bar.h"
 #include "app/run_pipeline.h"
+#include "io/atomic_file.h"
+#include "io/load_mesh.h"
 #include "io/scene.h"
+#include "sampling/control_io.h"
+#include "sampling/samplers.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -51,6 +55,42 @@ int cmd_run(const fs::path& scene_file, const ff::app::RunOptions& opt) {
   return 0;
 }
 
+struct SampleOptions {
+  fs::path mesh, out;
+  std::string method = "blue-noise";
+  std::vector<float> drop_box;  // 6 numbers per box
+  ff::sampling::SamplingParams params;
+};
+
+int cmd_sample(SampleOptions o) {
+  const auto m = ff::sampling::parse_method(o.method);
+  if (!m) return fail(ff::param_error(fmt::format("--method {} is not one of blue-noise, voxel, surface", o.method)));
+  o.params.method = *m;
+  if (o.drop_box.size() % 6 != 0)
+    return fail(ff::param_error("--drop-box takes 6 numbers per box: min x y z, max x y z"));
+  for (std::size_t i = 0; i < o.drop_box.size(); i += 6) {
+    ff::Aabb b;
+    b.min = ff::Vec3f(o.drop_box[i], o.drop_box[i + 1], o.drop_box[i + 2]);
+    b.max = ff::Vec3f(o.drop_box[i + 3], o.drop_box[i + 4], o.drop_box[i + 5]);
+    o.params.sparse.drop_boxes.push_back(b);
+  }
+  if (auto st = o.params.validate(); !st.ok()) return fail(st.error());
+  // Check the output before the (possibly long) sampling.
+  const fs::path dir = o.out.has_parent_path() ? o.out.parent_path() : fs::path(".");
+  if (auto st = ff::io::ensure_writable_dir(dir); !st.ok()) return fail(st.error());
+  auto mesh = ff::io::load_mesh(o.mesh);
+  if (!mesh) return fail(mesh.error());
+  ff::app::ProgressBar bar(stderr);
+  ff::sampling::SampleReport rep;
+  auto set = ff::sampling::sample_target(*mesh, o.params, 0, &rep, bar);
+  if (!set) return fail(set.error());
+  for (const auto& w : rep.warnings) spdlog::warn("{}", w);
+  if (auto st = ff::sampling::write_controls_ply(o.out, *set); !st.ok()) return fail(st.error());
+  spdlog::info("{} control particles ({}, spacing {:g} m, volume {:g} m^3, {} dropped) in {:.2f} s -> {}", set->size(),
+               ff::sampling::method_name(rep.method), rep.spacing, rep.volume, rep.dropped, rep.seconds, o.out.string());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -73,6 +113,23 @@ int main(int argc, char** argv) {
   run->add_option("--frames", frames, "output frames to simulate (overrides output.frames)")->check(CLI::Range(1, 10'000'000));
   run->add_flag("--resume", run_opt.resume, "continue a killed run from OUT/checkpoint/");
 
+  SampleOptions sample_opt;
+  auto* sample = app.add_subcommand("sample", "sample a mesh into control particles (PLY with density, weight, phi)");
+  sample->add_option("mesh", sample_opt.mesh, "mesh file (any format Assimp reads)")->required();
+  sample->add_option("-o,--out", sample_opt.out, "output PLY file")->required();
+  sample->add_option("--spacing", sample_opt.params.spacing, "sample spacing d in metres (default: about --count samples)");
+  sample->add_option("--count", sample_opt.params.auto_count, "samples aimed at when --spacing is not given")
+      ->capture_default_str();
+  sample->add_option("--method", sample_opt.method, "blue-noise, voxel or surface")->capture_default_str();
+  sample->add_option("--seed", sample_opt.params.seed, "random seed")->capture_default_str();
+  sample->add_option("--relax-steps", sample_opt.params.relax_steps, "blue-noise relaxation steps")->capture_default_str();
+  sample->add_option("--max-samples", sample_opt.params.max_samples, "refuse to make more samples")->capture_default_str();
+  sample->add_option("--drop-fraction", sample_opt.params.sparse.drop_fraction,
+                     "sparse sampling: remove this fraction of the samples at random");
+  sample->add_option("--drop-box", sample_opt.drop_box,
+                     "sparse sampling: remove the samples in the box x0 y0 z0 x1 y1 z1 (repeatable)")
+      ->expected(6)->allow_extra_args(false);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -87,6 +144,7 @@ int main(int argc, char** argv) {
   if (frames > 0) run_opt.frames = frames;
 
   if (*run) return cmd_run(scene_file, run_opt);
+  if (*sample) return cmd_sample(std::move(sample_opt));
   // No sub-command: the bundled default scene into ./fluidform-out.
   return cmd_run(default_scene(), ff::app::RunOptions{});
 }

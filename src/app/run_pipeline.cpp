@@ -1,5 +1,7 @@
 #include "app/run_pipeline.h"
 
+#include "app/targets.h"
+
 #include "core/memory.h"
 #include "core/parallel.h"
 #include "core/timer.h"
@@ -108,7 +110,10 @@ fs::path frame_path(const fs::path& out, int frame) {
 Status write_frame(const fs::path& out, int frame, const sim::ParticleSet& p, bool velocity,
                    std::vector<Vec3f>& x, std::vector<Vec3f>& v, std::vector<std::uint8_t>& t) {
   sim::sorted_by_id(p, x, v, t);
-  io::ParticleFrameView view{x, velocity ? std::span<const Vec3f>(v) : std::span<const Vec3f>(), t};
+  io::ParticleFrameView view;
+  view.positions = x;
+  if (velocity) view.velocities = v;
+  view.targets = t;
   return io::write_particles_ply(frame_path(out, frame), view);
 }
 
@@ -136,8 +141,6 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
                  scene.targets[i].mesh.filename().string(), mesh.vertices.size(), mesh.triangles.size(),
                  st.dropped_degenerate);
   }
-  if (!scene.targets.empty())
-    spdlog::warn("this build has no shape controller yet: the fluid runs uncontrolled and targets are only checked");
 
   // The fluid is made (and its size checked) before the output folder is touched.
   sim::ParticleSet initial;
@@ -148,6 +151,29 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
   FF_CHECK(io::ensure_writable_dir(out));
   FF_CHECK(io::ensure_writable_dir(out / "particles"));
   if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(ckpt_dir));
+
+  // Control particles of every target (METHOD §a.1), cached in OUT/cache by mesh content and parameters.
+  // The sampling spacing defaults to the fluid spacing d (METHOD §0: d_c = d).
+  sampling::SamplingParams sp = scene.sampling;
+  if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
+  sp.rest_density = scene.solver.rest_density;
+  json targets_json = json::array();
+  std::vector<sampling::ControlSet> controls;
+  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
+    FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), out / "cache", progress));
+    for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
+    if (tc.from_cache)
+      spdlog::info("target {}: {} control particles from the cache ({})", i, tc.set.size(), tc.cache_file.filename().string());
+    else
+      spdlog::info("target {}: {} control particles ({}, spacing {:g} m, {:.2f} s)", i, tc.set.size(),
+                   sampling::method_name(tc.report.method), tc.report.spacing, tc.report.seconds);
+    targets_json.push_back({{"mesh", scene.targets[i].mesh.string()}, {"control_particles", tc.set.size()},
+                            {"spacing", tc.set.spacing}, {"cached", tc.from_cache},
+                            {"controls", fs::relative(tc.cache_file, out).string()}});
+    controls.push_back(std::move(tc.set));
+  }
+  if (!controls.empty())
+    spdlog::warn("this build has no shape controller yet: targets are sampled, but the fluid runs uncontrolled");
 
   sim::ParticleSet particles;
   std::vector<FrameRow> rows;
@@ -194,6 +220,7 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
     rep["status"] = status;
     if (!error.empty()) rep["error"] = error;
     rep["scene"] = scene_to_json(scene);
+    rep["targets"] = targets_json;
     double peak = 0.0;
     for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
     rep["totals"] = {{"particles", particles.size()},

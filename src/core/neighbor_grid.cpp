@@ -152,7 +152,7 @@ int NeighborGrid::neighbor_keys(const Vec3i& c, Index* keys) const {
 
 void NeighborGrid::build(std::span<const Vec3f> points) {
   const std::size_t n = points.size();
-  const int T = thread_count();
+  const int T = static_cast<std::int64_t>(n) < kMinParallel ? 1 : thread_count();
   // Bounding box of the points (min/max are exact in any order, so per-thread boxes merge
   // deterministically); non-finite coordinates are the solver's to report, they land in cell 0.
   std::vector<Aabb> boxes(static_cast<std::size_t>(T));
@@ -255,7 +255,7 @@ template <bool kSelf, bool kCompact>
 void NeighborGrid::gather(std::span<const Vec3f> binned, std::span<const Vec3f> queries, float r,
                           NeighborList& out) const {
   const std::size_t n = queries.size();
-  const int T = thread_count();
+  const int T = static_cast<std::int64_t>(n) < kMinParallel ? 1 : thread_count();
   const std::size_t chunk = std::max<std::size_t>(1, (n + static_cast<std::size_t>(T) - 1) / static_cast<std::size_t>(T));
   const std::size_t segments = std::max<std::size_t>(1, (n + chunk - 1) / chunk);
   out.count = n;

@@ -194,7 +194,7 @@ template <class T>
 void apply_permutation(std::vector<T>& a, std::span<const Index> perm, std::vector<T>& scratch) {
   scratch.resize(a.size());
   const auto n = static_cast<std::int64_t>(a.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= 2048)
   for (std::int64_t i = 0; i < n; ++i) scratch[static_cast<std::size_t>(i)] = a[perm[static_cast<std::size_t>(i)]];
   a.swap(scratch);
 }

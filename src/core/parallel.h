@@ -9,10 +9,14 @@
 
 namespace ff::core {
 
+/// Loops shorter than this run on the calling thread: a parallel region costs microseconds, and far more
+/// when the machine is oversubscribed (a barrier then waits for a descheduled thread's time slice).
+inline constexpr std::int64_t kMinParallel = 2048;
+
 /// Runs f(i) for i in [0, n) with a static schedule. f must write only data owned by i.
 template <class F>
 void parallel_for(std::int64_t n, F&& f) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kMinParallel)
   for (std::int64_t i = 0; i < n; ++i) f(i);
 }
 
@@ -24,7 +28,7 @@ template <class F>
 double deterministic_sum(std::int64_t n, F&& f) {
   const std::int64_t chunks = (n + kReduceChunk - 1) / kReduceChunk;
   std::vector<double> partial(static_cast<std::size_t>(std::max<std::int64_t>(chunks, 1)), 0.0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (chunks > 1)
   for (std::int64_t c = 0; c < chunks; ++c) {
     double s = 0.0;
     const std::int64_t end = std::min(n, (c + 1) * kReduceChunk);
@@ -41,7 +45,7 @@ template <class F>
 double deterministic_max(std::int64_t n, double init, F&& f) {
   const std::int64_t chunks = (n + kReduceChunk - 1) / kReduceChunk;
   std::vector<double> partial(static_cast<std::size_t>(std::max<std::int64_t>(chunks, 1)), init);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (chunks > 1)
   for (std::int64_t c = 0; c < chunks; ++c) {
     double m = init;
     const std::int64_t end = std::min(n, (c + 1) * kReduceChunk);

@@ -23,6 +23,7 @@ Status Scene::validate() const {
   FF_CHECK(solver.validate());
   FF_CHECK(domain.validate(solver.particle_radius));
   FF_CHECK(output.validate());
+  FF_CHECK(sampling.validate());
   for (std::size_t i = 0; i < fluid.size(); ++i) FF_CHECK(fluid[i].validate(fmt::format("fluid[{}]", i)));
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const auto p = fmt::format("targets[{}]", i);
@@ -117,6 +118,53 @@ Status read_targets(const json& j, const fs::path& base, std::vector<TargetSpec>
   return {};
 }
 
+Status read_sampling(const json& j, sampling::SamplingParams& p) {
+  JsonObject o(j, "sampling");
+  FF_CHECK(o.check_object());
+  std::string method;
+  FF_CHECK(o.get("method", method));
+  if (!method.empty()) {
+    const auto m = sampling::parse_method(method);
+    if (!m)
+      return param_error(fmt::format("sampling.method = \"{}\" is not one of blue-noise, voxel, surface", method));
+    p.method = *m;
+  }
+  FF_CHECK(o.get("spacing", p.spacing));
+  std::int64_t count = static_cast<std::int64_t>(p.auto_count), seed = static_cast<std::int64_t>(p.seed),
+               max_samples = static_cast<std::int64_t>(p.max_samples);
+  FF_CHECK(o.get("auto_count", count));
+  FF_CHECK(o.get("seed", seed));
+  FF_CHECK(o.get("max_samples", max_samples));
+  if (count < 0 || seed < 0 || max_samples < 0)
+    return param_error("sampling: auto_count, seed and max_samples must not be negative");
+  p.auto_count = static_cast<std::size_t>(count);
+  p.seed = static_cast<std::uint64_t>(seed);
+  p.max_samples = static_cast<std::size_t>(max_samples);
+  FF_CHECK(o.get("relax_steps", p.relax_steps));
+  FF_CHECK(o.get("support_factor", p.support_factor));
+  FF_CHECK(o.get("phi_offset", p.phi_offset));
+  if (const json* sp = o.child("sparse")) {
+    JsonObject so(*sp, "sampling.sparse");
+    FF_CHECK(so.check_object());
+    FF_CHECK(so.get("drop_fraction", p.sparse.drop_fraction));
+    if (const json* boxes = so.child("drop_boxes")) {
+      if (!boxes->is_array()) return param_error("sampling.sparse.drop_boxes: expected a list of {\"min\", \"max\"} boxes");
+      for (std::size_t i = 0; i < boxes->size(); ++i) {
+        JsonObject bo((*boxes)[i], fmt::format("sampling.sparse.drop_boxes[{}]", i));
+        FF_CHECK(bo.check_object());
+        Aabb b;
+        b.min = b.max = Vec3f::Zero();
+        FF_CHECK(bo.get("min", b.min));
+        FF_CHECK(bo.get("max", b.max));
+        FF_CHECK(bo.finish());
+        p.sparse.drop_boxes.push_back(b);
+      }
+    }
+    FF_CHECK(so.finish());
+  }
+  return o.finish();
+}
+
 Status read_output(const json& j, OutputParams& p) {
   JsonObject o(j, "output");
   FF_CHECK(o.check_object());
@@ -150,6 +198,7 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   if (const json* v = root.child("fluid")) FF_CHECK(read_fluid(*v, s.fluid));
   if (const json* v = root.child("targets")) FF_CHECK(read_targets(*v, base_dir, s.targets));
   if (const json* v = root.child("output")) FF_CHECK(read_output(*v, s.output));
+  if (const json* v = root.child("sampling")) FF_CHECK(read_sampling(*v, s.sampling));
   FF_CHECK(root.finish());
   FF_CHECK(s.validate());
   // The resume hash covers everything that shapes the simulation; the frame count may change between runs.

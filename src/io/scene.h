@@ -13,6 +13,7 @@
 // out-of-range values name the key, the value and the range. Mesh paths are relative to the scene file.
 #include "core/error.h"
 #include "io/load_mesh.h"
+#include "sampling/sampling_params.h"
 #include "sim/solver_params.h"
 
 #include <cstdint>
@@ -44,6 +45,7 @@ struct Scene {
   std::vector<sim::FluidSource> fluid;
   std::vector<TargetSpec> targets;
   OutputParams output;
+  sampling::SamplingParams sampling;  ///< how targets become control particles (spacing 0 = the fluid spacing d)
   std::uint64_t hash = 0;            ///< content hash of the simulation-relevant settings (for --resume)
 
   /// Cross-field checks (every struct's validate(), fluid present, sources in the domain).

@@ -4,7 +4,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -17,13 +19,21 @@ static_assert(std::endian::native == std::endian::little, "PLY writer assumes a 
 std::vector<std::uint8_t> encode_particles_ply(const ParticleFrameView& f) {
   const std::size_t n = f.positions.size();
   const bool vel = !f.velocities.empty(), tgt = !f.targets.empty();
-  std::string header = fmt::format("ply\nformat binary_little_endian 1.0\ncomment fluidform particles\n"
+  std::string comments;
+  for (std::size_t b = 0; b <= f.comment.size();) {
+    std::size_t e = f.comment.find('\n', b);
+    if (e == std::string_view::npos) e = f.comment.size();
+    comments += fmt::format("comment {}\n", f.comment.substr(b, e - b));
+    b = e + 1;
+  }
+  std::string header = fmt::format("ply\nformat binary_little_endian 1.0\n{}"
                                    "element vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
-                                   n);
+                                   comments, n);
   if (vel) header += "property float vx\nproperty float vy\nproperty float vz\n";
   if (tgt) header += "property uchar target\n";
+  for (const auto& s : f.scalars) header += fmt::format("property float {}\n", s.name);
   header += "end_header\n";
-  const std::size_t stride = 12 + (vel ? 12 : 0) + (tgt ? 1 : 0);
+  const std::size_t stride = 12 + (vel ? 12 : 0) + (tgt ? 1 : 0) + 4 * f.scalars.size();
   std::vector<std::uint8_t> out(header.size() + n * stride);
   std::memcpy(out.data(), header.data(), header.size());
   std::uint8_t* p = out.data() + header.size();
@@ -35,6 +45,10 @@ std::vector<std::uint8_t> encode_particles_ply(const ParticleFrameView& f) {
       p += 12;
     }
     if (tgt) *p++ = f.targets[i];
+    for (const auto& s : f.scalars) {
+      std::memcpy(p, &s.values[i], 4);
+      p += 4;
+    }
   }
   return out;
 }
@@ -44,6 +58,14 @@ Status write_particles_ply(const std::filesystem::path& path, const ParticleFram
     return input_error("write_particles_ply: velocity count differs from position count");
   if (!frame.targets.empty() && frame.targets.size() != frame.positions.size())
     return input_error("write_particles_ply: target count differs from position count");
+  for (const auto& s : frame.scalars) {
+    if (s.values.size() != frame.positions.size())
+      return input_error(fmt::format("write_particles_ply: property '{}' count differs from position count", s.name));
+    const bool name_ok = !s.name.empty() && std::all_of(s.name.begin(), s.name.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    });
+    if (!name_ok) return input_error(fmt::format("write_particles_ply: bad property name '{}'", s.name));
+  }
   const auto bytes = encode_particles_ply(frame);
   return write_file_atomic(path, bytes);
 }
@@ -58,12 +80,15 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
   bool in_vertex = false, binary_le = false;
   struct Prop { std::string name; int size; };
   std::vector<Prop> props;
+  std::vector<std::string> comments;
   while (std::getline(in, line)) {
     if (line == "end_header") break;
     std::istringstream ls(line);
     std::string word;
     ls >> word;
-    if (word == "format") {
+    if (word == "comment") {
+      comments.push_back(line.size() > 8 ? line.substr(8) : std::string());
+    } else if (word == "format") {
       std::string fmt_name;
       ls >> fmt_name;
       binary_le = fmt_name == "binary_little_endian";
@@ -92,19 +117,44 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
   // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply.
   if (ix < 0) return input_error(fmt::format("{}: no x y z properties", path.string()));
   const std::size_t stride = static_cast<std::size_t>(off);
+  // A header may claim any count: check it against the file before allocating.
+  const auto here = in.tellg();
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<std::uint64_t>(in.tellg() - here);
+  in.seekg(here);
+  if (stride == 0 || n > size / stride)
+    return input_error(fmt::format("{}: truncated ({} bytes of particle data for {} particles of {} bytes)",
+                                   path.string(), size, n, stride));
   std::vector<char> buf(n * stride);
   in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
   if (static_cast<std::size_t>(in.gcount()) != buf.size())
     return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", path.string(), in.gcount(), buf.size()));
   ParticleFrame f;
+  f.comments = std::move(comments);
   f.positions.resize(n);
   if (ivx >= 0) f.velocities.resize(n);
   if (itg >= 0) f.targets.resize(n);
+  // Every other float property is kept by name.
+  std::vector<int> scalar_offset;
+  {
+    int o = 0;
+    for (const auto& p : props) {
+      const bool known = p.name == "x" || p.name == "y" || p.name == "z" || p.name == "target" ||
+                         (ivx >= 0 && (p.name == "vx" || p.name == "vy" || p.name == "vz"));
+      if (!known && p.size == 4) {
+        f.scalars.emplace_back(p.name, std::vector<float>(n));
+        scalar_offset.push_back(o);
+      }
+      o += p.size;
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const char* rec = buf.data() + i * stride;
     std::memcpy(f.positions[i].data(), rec + ix, 12);
     if (ivx >= 0) std::memcpy(f.velocities[i].data(), rec + ivx, 12);
     if (itg >= 0) f.targets[i] = static_cast<std::uint8_t>(rec[itg]);
+    for (std::size_t s = 0; s < scalar_offset.size(); ++s)
+      std::memcpy(&f.scalars[s].second[i], rec + scalar_offset[s], 4);
   }
   return f;
 }

@@ -2,7 +2,7 @@
 
 #include "core/parallel.h"
 #include "core/timer.h"
-#include "sim/pair_loop.h"
+#include "core/pair_loop.h"
 #include "sim/pbf_constraints.h"
 
 #include <Eigen/Geometry>  // cross product (vorticity)
@@ -13,6 +13,7 @@
 
 namespace ff::sim {
 using core::parallel_for;
+using core::for_neighbors4;
 
 PbfSolver::PbfSolver(const SolverParams& params, const Domain& domain)
     : params_(params),

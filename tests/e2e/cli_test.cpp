@@ -1,6 +1,7 @@
 // End-to-end tests of the fluidform binary: outputs, exit codes, one-line errors, no partial files,
 // thread-count independence and kill -9 + --resume.
 #include "io/write_ply.h"
+#include "sampling/control_io.h"
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
@@ -143,8 +144,9 @@ TEST(Cli, KillNineThenResumeGivesTheSameFinalFrame) {
     "solver": {"particle_radius": 0.015},
     "domain": {"min": [0, 0, 0], "max": [0.9, 0.6, 0.3]},
     "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.3, 0.5, 0.3]}],
-    "output": {"frames": 90, "checkpoint_every": 5}
+    "output": {"frames": 400, "checkpoint_every": 5}
   })";
+  // Long enough (~2 s) that the kill lands mid-run however fast the solver gets.
   const auto scene = write_scene(dir, scene_json);
   ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "full").string()}).code, 0);
 
@@ -159,17 +161,17 @@ TEST(Cli, KillNineThenResumeGivesTheSameFinalFrame) {
   ASSERT_EQ(::kill(p.pid, SIGKILL), 0);
   const auto killed = wait(p);
   ASSERT_EQ(killed.code, 128 + SIGKILL) << "the run finished before it could be killed; make the scene longer";
-  ASSERT_FALSE(fs::exists(out / "particles" / "frame_00090.ply"));
+  ASSERT_FALSE(fs::exists(out / "particles" / "frame_00400.ply"));
 
   const auto resumed = run({"run", scene.string(), "-o", out.string(), "--resume"});
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_NE(resumed.err.find("resuming from frame"), std::string::npos) << resumed.err;
-  const auto a = read_file(dir / "full" / "particles" / "frame_00090.ply");
-  const auto b = read_file(out / "particles" / "frame_00090.ply");
+  const auto a = read_file(dir / "full" / "particles" / "frame_00400.ply");
+  const auto b = read_file(out / "particles" / "frame_00400.ply");
   ASSERT_FALSE(a.empty());
   EXPECT_TRUE(a == b) << "resumed final frame differs from the uninterrupted run";
-  // metrics.csv is complete after the resume: header + frames 0..90.
-  EXPECT_EQ(count_lines(read_file(out / "metrics.csv")), 92u);
+  // metrics.csv is complete after the resume: header + frames 0..400.
+  EXPECT_EQ(count_lines(read_file(out / "metrics.csv")), 402u);
   expect_no_temp_files(out);
 }
 
@@ -223,6 +225,10 @@ TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
       {"unknown option", "", {"run", "x.json", "--bogus"}, 2, "bogus"},
       {"frames zero", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--frames", "0"}, 2, "frames"},
       {"no scene argument", "", {"run"}, 2, "scene"},
+      {"unknown sampling key", "{\"sampling\":{\"spacng\":0.1}," + fluid + "}", {"run", "{scene}", "-o", "{out}"}, 2,
+       "did you mean 'spacing'"},
+      {"bad sampling method", "{\"sampling\":{\"method\":\"grid\"}," + fluid + "}", {"run", "{scene}", "-o", "{out}"}, 2,
+       "sampling.method"},
   };
   int k = 0;
   for (const auto& c : cases) {
@@ -256,6 +262,100 @@ TEST(Cli, AFailedRunKeepsWhatItWroteBefore) {
   write_scene(dir, R"({"fluid": [ )", "bad.json");
   EXPECT_EQ(run({"-q", "run", (dir / "bad.json").string(), "-o", (dir / "o").string()}).code, 2);
   EXPECT_EQ(read_file(dir / "o" / "particles" / "frame_00012.ply"), before);
+}
+
+}  // namespace
+}  // namespace ff
+
+namespace ff {
+namespace {
+
+TEST(Cli, SampleWritesControlParticlesWithWeights) {
+  const auto dir = test::temp_dir("sample");
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(0, 0, 0), Vec3f(1, 0.5f, 0.5f)));
+  const auto r = run({"sample", (dir / "box.obj").string(), "--spacing", "0.1", "--method", "voxel", "-o",
+                      (dir / "c.ply").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto set = sampling::read_controls_ply(dir / "c.ply");
+  ASSERT_TRUE(set.has_value()) << set.error().message;
+  EXPECT_EQ(set->size(), 10u * 5u * 5u);
+  EXPECT_FLOAT_EQ(set->spacing, 0.1f);
+  for (float w : set->weight) EXPECT_TRUE(w > 0.0f && w <= 1.0f);
+  for (float p : set->phi) EXPECT_TRUE(p >= 0.05f - 1e-6f && p <= 1.05f + 1e-6f);
+
+  // Blue noise (the default) with the automatic spacing: about --count samples.
+  const auto b = run({"sample", (dir / "box.obj").string(), "--count", "2000", "-o", (dir / "b.ply").string()});
+  ASSERT_EQ(b.code, 0) << b.err;
+  auto blue = sampling::read_controls_ply(dir / "b.ply");
+  ASSERT_TRUE(blue.has_value());
+  EXPECT_NEAR(double(blue->size()), 2000.0, 100.0);
+
+  // An open sheet: a shell, a warning, exit 0.
+  io::TriangleMesh sheet;
+  sheet.vertices = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(1, 0, 1), Vec3f(0, 0, 1)};
+  sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
+  test::write_obj(dir / "sheet.obj", sheet);
+  const auto s = run({"sample", (dir / "sheet.obj").string(), "--spacing", "0.1", "-o", (dir / "s.ply").string()});
+  ASSERT_EQ(s.code, 0) << s.err;
+  EXPECT_NE(s.err.find("encloses no volume"), std::string::npos) << s.err;
+  EXPECT_TRUE(fs::exists(dir / "s.ply"));
+}
+
+TEST(Cli, SampleBadInputIsOneLineAndWritesNothing) {
+  const auto dir = test::temp_dir("sample_bad");
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(0, 0, 0), Vec3f(1, 1, 1)));
+  struct Case {
+    std::string name;
+    std::vector<std::string> args;
+    std::string must_contain;
+  };
+  const std::string out = (dir / "c.ply").string();
+  const std::vector<Case> cases = {
+      {"missing mesh", {"sample", "/nonexistent.obj", "-o", out}, "nonexistent.obj"},
+      {"empty mesh", {"sample", (test::data_dir() / "empty.obj").string(), "-o", out}, "empty.obj"},
+      {"bad method", {"sample", (dir / "box.obj").string(), "--method", "lattice", "-o", out}, "lattice"},
+      {"too many samples", {"sample", (dir / "box.obj").string(), "--spacing", "0.0001", "-o", out}, "more than the limit"},
+      {"negative spacing", {"sample", (dir / "box.obj").string(), "--spacing", "-1", "-o", out}, "spacing"},
+      {"drop fraction 1", {"sample", (dir / "box.obj").string(), "--drop-fraction", "1", "-o", out}, "drop_fraction"},
+      {"no output", {"sample", (dir / "box.obj").string()}, "out"},
+  };
+  for (const auto& c : cases) {
+    auto args = c.args;
+    args.insert(args.begin(), "-q");
+    const auto r = run(args);
+    EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
+    EXPECT_EQ(count_lines(r.err), 1u) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.must_contain), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+  expect_no_temp_files(dir);
+}
+
+TEST(Cli, RunSamplesTargetsOnceThenUsesTheCache) {
+  const auto dir = test::temp_dir("cache");
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(0.3f, 0.1f, 0.05f), Vec3f(0.5f, 0.3f, 0.25f)));
+  const auto scene = write_scene(dir, R"({
+    "solver": {"particle_radius": 0.02},
+    "domain": {"min": [0, 0, 0], "max": [0.8, 0.6, 0.32]},
+    "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.2, 0.2, 0.2]}],
+    "targets": [{"mesh": "box.obj"}],
+    "output": {"frames": 2}
+  })");
+  const auto first = run({"run", scene.string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(first.code, 0) << first.err;
+  std::string rep = read_file(dir / "out" / "report.json");
+  EXPECT_NE(rep.find("\"cached\": false"), std::string::npos) << rep;
+  EXPECT_NE(rep.find("\"control_particles\": "), std::string::npos);
+  const auto second = run({"run", scene.string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(second.code, 0) << second.err;
+  rep = read_file(dir / "out" / "report.json");
+  EXPECT_NE(rep.find("\"cached\": true"), std::string::npos) << rep;
+  EXPECT_NE(second.err.find("from the cache"), std::string::npos) << second.err;
+  // A changed mesh is sampled again.
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(0.3f, 0.1f, 0.05f), Vec3f(0.55f, 0.3f, 0.25f)));
+  const auto third = run({"run", scene.string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(third.code, 0) << third.err;
+  EXPECT_NE(read_file(dir / "out" / "report.json").find("\"cached\": false"), std::string::npos);
 }
 
 }  // namespace

@@ -10,17 +10,25 @@
 namespace ff::io {
 namespace {
 
+ParticleFrameView view(std::span<const Vec3f> x, std::span<const Vec3f> v, std::span<const std::uint8_t> t) {
+  ParticleFrameView f;
+  f.positions = x;
+  f.velocities = v;
+  f.targets = t;
+  return f;
+}
+
 TEST(WritePly, RoundTripWithAndWithoutOptionalProperties) {
   const auto dir = test::temp_dir("ply");
   std::vector<Vec3f> x{{1, 2, 3}, {-4, 5.5f, 6}}, v{{0.1f, 0.2f, 0.3f}, {7, 8, 9}};
   std::vector<std::uint8_t> t{0, 255};
-  ASSERT_TRUE(write_particles_ply(dir / "a.ply", {x, v, t}).ok());
+  ASSERT_TRUE(write_particles_ply(dir / "a.ply", view(x, v, t)).ok());
   auto a = read_particles_ply(dir / "a.ply");
   ASSERT_TRUE(a.has_value()) << a.error().message;
   EXPECT_EQ(a->positions, x);
   EXPECT_EQ(a->velocities, v);
   EXPECT_EQ(a->targets, t);
-  ASSERT_TRUE(write_particles_ply(dir / "b.ply", {x, {}, {}}).ok());
+  ASSERT_TRUE(write_particles_ply(dir / "b.ply", view(x, {}, {})).ok());
   auto b = read_particles_ply(dir / "b.ply");
   ASSERT_TRUE(b.has_value());
   EXPECT_EQ(b->positions, x);
@@ -40,15 +48,16 @@ TEST(WritePly, RoundTripWithAndWithoutOptionalProperties) {
 TEST(WritePly, MismatchedSizesAndTruncatedFilesAreErrors) {
   const auto dir = test::temp_dir("ply2");
   std::vector<Vec3f> x{{1, 2, 3}}, v{{0, 0, 0}, {1, 1, 1}};
-  EXPECT_FALSE(write_particles_ply(dir / "bad.ply", {x, v, {}}).ok());
+  EXPECT_FALSE(write_particles_ply(dir / "bad.ply", view(x, v, {})).ok());
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply"));
-  ASSERT_TRUE(write_particles_ply(dir / "c.ply", {x, {}, {}}).ok());
+  ASSERT_TRUE(write_particles_ply(dir / "c.ply", view(x, {}, {})).ok());
   std::filesystem::resize_file(dir / "c.ply", std::filesystem::file_size(dir / "c.ply") - 4);
   EXPECT_FALSE(read_particles_ply(dir / "c.ply").has_value());
 }
 
 TEST(WritePly, UnwritableFolderIsAnErrorNamingThePath) {
-  auto st = write_particles_ply("/proc/fluidform-nope/a.ply", {std::vector<Vec3f>{{0, 0, 0}}, {}, {}});
+  const std::vector<Vec3f> one{{0, 0, 0}};
+  auto st = write_particles_ply("/proc/fluidform-nope/a.ply", view(one, {}, {}));
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.error().message.find("/proc/fluidform-nope/a.ply"), std::string::npos);
 }

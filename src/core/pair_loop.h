@@ -1,12 +1,12 @@
 #pragma once
-// The solver's pair loops, four neighbours at a time (core/simd.h): indices are decoded in batches of
+// Pair loops over neighbour lists, four neighbours at a time (core/simd.h): indices are decoded in batches of
 // 64, the last group of a batch is padded with the particle itself and masked off.
 #include "core/neighbor_grid.h"
 #include "core/simd.h"
 
 #include <algorithm>
 
-namespace ff::sim {
+namespace ff::core {
 
 /// Calls f(const Index* j, __m128 lanes) for each group of four neighbours of particle `self`;
 /// `lanes` masks the real entries of the group (j[k] == self for the padding).
@@ -22,4 +22,4 @@ inline void for_neighbors4(const core::NeighborRange& r, Index self, F&& f) {
   }
 }
 
-}  // namespace ff::sim
+}  // namespace ff::core

@@ -1,0 +1,184 @@
+#include "sampling/relax.h"
+
+#include "core/neighbor_grid.h"
+#include "core/pair_loop.h"
+#include "core/parallel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace ff::sampling {
+
+void push_inside(std::span<Vec3f> x, const SdfGrid& sdf, float depth) {
+  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) {
+    Vec3f& p = x[static_cast<std::size_t>(i)];
+    // Two Newton-like passes: the interpolated SDF is not exactly a distance far from the surface.
+    for (int k = 0; k < 2; ++k) {
+      const SdfGrid::Sample s = sdf.sample(p);
+      if (s.distance <= -depth) break;
+      const float g = s.gradient.norm();
+      if (!(g > 0.0f)) break;  // on a medial ridge: no direction to move in
+      p -= ((s.distance + depth) / g) * s.gradient;
+    }
+  });
+}
+
+std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_distance,
+                            std::span<const Vec3f> surface, std::size_t* added) {
+  // 1. Separate: pairs a little too close are pushed apart (hard distance constraints to 1.03× the
+  //    minimum, Jacobi with averaging, a few sweeps), staying inside: this settles nearly all of them
+  //    without opening a hole.
+  const float target = 1.03f * min_distance, depth = 0.0f;
+  core::NeighborGrid grid(target);
+  core::NeighborList nb;
+  std::vector<Vec3f> scratch, delta(x.size());
+  for (int sweep = 0; sweep < 10; ++sweep) {
+    grid.build(x);
+    core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
+    grid.points_were_sorted();
+    grid.neighbors(x, nb);
+    if (nb.total() == 0) break;
+    core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      Vec3f dx = Vec3f::Zero();
+      int active = 0;
+      for (Index j : nb.of(i)) {
+        const Vec3f r = x[i] - x[j];
+        const float len = r.norm();
+        if (len <= 1e-7f * target) continue;
+        dx += (0.5f * (target - len) / len) * r;
+        ++active;
+      }
+      delta[i] = active ? Vec3f(dx / float(active)) : Vec3f::Zero();
+    });
+    core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) { x[i] += delta[i]; });
+    push_inside(x, sdf, depth);
+  }
+  // 2. Drop: in cell order, a sample is kept unless an earlier kept sample is closer than min_distance.
+  grid = core::NeighborGrid(min_distance);
+  grid.build(x);
+  core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
+  grid.points_were_sorted();
+  grid.neighbors(x, nb);
+  std::vector<std::uint8_t> keep(x.size(), 1);
+  const float m2 = min_distance * min_distance;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (Index j : nb.of(i))
+      if (j < i && keep[j] && (x[i] - x[j]).squaredNorm() < m2) {
+        keep[i] = 0;
+        break;
+      }
+  std::vector<Vec3f> kept;
+  kept.reserve(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (keep[i]) kept.push_back(x[i]);
+  const std::size_t dropped = x.size() - kept.size();
+
+  // 3. Fill: an inside grid node with no sample within min_distance gets one (greedily, in node order,
+  //    each new sample at least min_distance from all others). This is where thin tips get covered.
+  std::vector<Vec3f> nodes;
+  for (int k = 0; k < sdf.dims.z(); ++k)
+    for (int j = 0; j < sdf.dims.y(); ++j)
+      for (int i = 0; i < sdf.dims.x(); ++i)
+        if (sdf.value[sdf.index(i, j, k)] < 0.0f) nodes.push_back(sdf.node(i, j, k));
+  // Surface points reach into tips thinner than the node spacing.
+  nodes.insert(nodes.end(), surface.begin(), surface.end());
+  core::NeighborGrid kg(min_distance);
+  kg.build(kept);
+  std::size_t inserted = 0;
+  constexpr std::size_t kChunk = std::size_t(1) << 16;
+  std::vector<Vec3f> fresh;
+  for (std::size_t a = 0; a < nodes.size(); a += kChunk) {
+    const std::size_t b = std::min(nodes.size(), a + kChunk);
+    kg.query(kept, std::span<const Vec3f>(nodes).subspan(a, b - a), min_distance, nb);
+    for (std::size_t q = a; q < b; ++q) {
+      if (!nb.of(q - a).empty()) continue;
+      // Few nodes are empty: check them against the samples added so far by brute force.
+      const Vec3f p = nodes[q];
+      const bool clear = std::none_of(fresh.begin(), fresh.end(), [&](const Vec3f& f) { return (f - p).squaredNorm() < m2; });
+      if (clear) fresh.push_back(p);
+    }
+  }
+  inserted = fresh.size();
+  kept.insert(kept.end(), fresh.begin(), fresh.end());
+  x.swap(kept);
+  if (added) *added = inserted;
+  return dropped;
+}
+
+void relax_samples(std::vector<Vec3f>& x, const SdfGrid& sdf, const RelaxParams& params, core::Progress& progress) {
+  const std::size_t n = x.size();
+  const auto ni = static_cast<std::int64_t>(n);
+  const float d = params.spacing, rc = params.reach * d, depth = params.boundary_depth * d;
+  // Verlet lists: neighbours within r_c + skin are found only when some sample may have moved half the
+  // skin since the last search (a step moves a sample by at most max_move·d, projection included).
+  const float skin = 0.5f * d;
+  core::NeighborGrid grid(rc + skin);
+  core::NeighborList nb;
+  std::vector<Vec3f> scratch, force(n), at_search;
+  progress.begin("blue-noise relaxation", static_cast<std::size_t>(params.steps));
+  for (int step = 0; step < params.steps; ++step) {
+    const bool stale = at_search.empty() || core::deterministic_max(ni, 0.0, [&](std::int64_t i) {
+      return double((x[i] - at_search[i]).squaredNorm());
+    }) > double(0.25f * skin * skin);
+    if (stale) {
+      grid.build(x);
+      core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
+      grid.points_were_sorted();
+      grid.neighbors(x, nb);
+      at_search = x;
+    }
+    // F_i = −∇_i E, E = Σ_pairs (1 − r/r_c)³ / 3 · r_c: a soft repulsion that reaches past the nearest
+    // neighbours, so a void is closed by the samples around it.
+    const __m128 zero = _mm_setzero_ps(), rc4 = _mm_set1_ps(rc), inv_rc = _mm_set1_ps(1.0f / rc),
+                 one = _mm_set1_ps(1.0f), tiny = _mm_set1_ps(1e-7f * d);
+    core::parallel_for(ni, [&](std::int64_t ii) {
+      using namespace core::simd;
+      const auto i = static_cast<Index>(ii);
+      const __m128 px = broadcast(x[i].x()), py = broadcast(x[i].y()), pz = broadcast(x[i].z());
+      __m128 fx = zero, fy = zero, fz = zero;
+      // Four pairs at a time; coincident samples exert no force here (enforce_spacing separates them).
+      core::for_neighbors4(nb.of(i), i, [&](const Index* j, __m128 lanes) {
+        const V3 xj = gather(x.data(), j[0], j[1], j[2], j[3]);
+        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+        const __m128 len = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz)));
+        const __m128 use = _mm_and_ps(lanes, _mm_and_ps(_mm_cmplt_ps(len, rc4), _mm_cmpgt_ps(len, tiny)));
+        const __m128 q = _mm_sub_ps(one, _mm_mul_ps(len, inv_rc));
+        const __m128 c = select(use, _mm_div_ps(_mm_mul_ps(q, q), len));
+        fx = _mm_add_ps(fx, _mm_mul_ps(c, rx));
+        fy = _mm_add_ps(fy, _mm_mul_ps(c, ry));
+        fz = _mm_add_ps(fz, _mm_mul_ps(c, rz));
+      });
+      Vec3f f(hsum(fx), hsum(fy), hsum(fz));
+      // The sample's mirror image across the surface repels it too (at half strength): samples keep off
+      // the surface by about half a spacing, so the layers of a thin wall sit near its middle.
+      if (params.mirror > 0.0f) {
+        const SdfGrid::Sample s = sdf.sample(x[i]);
+        const float g = s.gradient.norm(), l = 2.0f * std::max(-s.distance, 0.0f);
+        if (g > 0.0f && l < rc) {
+          const float q = 1.0f - l / rc;
+          f -= (params.mirror * q * q / g) * s.gradient;
+        }
+      }
+      force[i] = f;
+    });
+    // Gradient descent with a step that moves the mean sample by `step_size`·d, annealed to a fifth of
+    // it over the run, each sample capped at `max_move`·d.
+    const double mean = core::deterministic_sum(ni, [&](std::int64_t i) { return double(force[i].norm()); }) / double(n);
+    const float anneal = 1.0f - 0.8f * float(step) / float(std::max(1, params.steps));
+    const float k = mean > 0.0 ? static_cast<float>(params.step_size * anneal * d / mean) : 0.0f;
+    const float cap = params.max_move * d;
+    core::parallel_for(ni, [&](std::int64_t i) {
+      Vec3f dx = k * force[i];
+      const float len = dx.norm();
+      if (len > cap) dx *= cap / len;
+      x[i] += dx;
+    });
+    push_inside(x, sdf, depth);
+    if (!progress.tick(static_cast<std::size_t>(step + 1))) break;
+  }
+  progress.end();
+}
+
+}  // namespace ff::sampling

@@ -1,0 +1,342 @@
+#include "sampling/samplers.h"
+
+#include "core/parallel.h"
+#include "core/timer.h"
+#include "sampling/relax.h"
+#include "sampling/sample_elimination.h"
+#include "sampling/weights.h"
+
+#include <Eigen/Geometry>  // cross product
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+
+namespace ff::sampling {
+namespace {
+
+// Random streams: one per fixed-size chunk of work, seeded from (seed, chunk), so results do not depend
+// on the thread count. Floats from the top 24 bits: the same on every standard library.
+std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+struct Rng {
+  std::mt19937_64 engine;
+  Rng(std::uint64_t seed, std::uint64_t stream) : engine(mix(seed ^ mix(stream))) {}
+  float uniform() { return static_cast<float>(engine() >> 40) * 0x1.0p-24f; }  // [0, 1)
+};
+
+constexpr std::size_t kChunk = 4096;  // random points per stream
+
+// Surface samples: N on the area A for hexagonal packing at spacing d.
+double surface_count(double area, float d) { return area / (0.5 * std::sqrt(3.0) * double(d) * d); }
+
+// The SDF grid resolution: half the spacing, coarser when the box would need more than ~64 M nodes.
+float sdf_spacing(const Aabb& box, float d) {
+  const Vec3f size = box.size() + Vec3f::Constant(4.0f * d);
+  float s = 0.5f * d;
+  while (double(size.x() / s) * double(size.y() / s) * double(size.z() / s) > 64e6) s *= 1.25f;
+  return s;
+}
+
+std::vector<Vec3f> drop_sparse(std::vector<Vec3f> x, const SparseParams& sparse, std::uint64_t seed) {
+  if (!sparse.active()) return x;
+  std::vector<Vec3f> kept;
+  kept.reserve(x.size());
+  for (std::size_t c = 0; c * kChunk < x.size(); ++c) {
+    Rng rng(seed, 0x5A5A0000ull + c);
+    for (std::size_t i = c * kChunk; i < std::min(x.size(), (c + 1) * kChunk); ++i) {
+      const bool in_box = std::any_of(sparse.drop_boxes.begin(), sparse.drop_boxes.end(),
+                                      [&](const Aabb& b) { return b.contains(x[i]); });
+      const bool dropped = rng.uniform() < sparse.drop_fraction;
+      if (!in_box && !dropped) kept.push_back(x[i]);
+    }
+  }
+  return kept;
+}
+
+}  // namespace
+
+void ignore_hidden_surfaces(SdfGrid& sdf) {
+  // Interface nodes (a 6-neighbour of the other sign) keep their exact distance; every other node gets
+  // the distance to them by fast sweeping (Zhao 2005: Gauss–Seidel sweeps of the first-order Eikonal
+  // update in the 8 axis orders). Where that distance exceeds the stored one by more than a node
+  // spacing, the stored distance was to a surface hidden inside the volume (a face of one part inside
+  // another): the swept value replaces it. Elsewhere the exact value stays.
+  const Vec3i n = sdf.dims;
+  const float h = sdf.spacing;
+  const std::size_t total = sdf.value.size();
+  constexpr float kFar = std::numeric_limits<float>::max();
+  std::vector<float> t(total, kFar);
+  bool hidden = false;
+  for (int k = 0; k < n.z(); ++k)
+    for (int j = 0; j < n.y(); ++j)
+      for (int i = 0; i < n.x(); ++i) {
+        const float v = sdf.value[sdf.index(i, j, k)];
+        bool interface = false;
+        const int nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+        for (const auto& c : nb)
+          if (c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < n.x() && c[1] < n.y() && c[2] < n.z() &&
+              (sdf.value[sdf.index(c[0], c[1], c[2])] < 0.0f) != (v < 0.0f))
+            interface = true;
+        if (interface) t[sdf.index(i, j, k)] = std::abs(v);
+        else if (std::abs(v) < 0.5f * h) hidden = true;  // on a surface with the same sign on both sides
+      }
+  if (!hidden) return;  // the usual case: every surface is a boundary, nothing to sweep
+  auto at = [&](int i, int j, int k) {
+    if (i < 0 || j < 0 || k < 0 || i >= n.x() || j >= n.y() || k >= n.z()) return kFar;
+    return t[sdf.index(i, j, k)];
+  };
+  for (int sweep = 0; sweep < 8; ++sweep) {
+    const int dx = sweep & 1 ? -1 : 1, dy = sweep & 2 ? -1 : 1, dz = sweep & 4 ? -1 : 1;
+    for (int kk = 0; kk < n.z(); ++kk)
+      for (int jj = 0; jj < n.y(); ++jj)
+        for (int ii = 0; ii < n.x(); ++ii) {
+          const int i = dx > 0 ? ii : n.x() - 1 - ii, j = dy > 0 ? jj : n.y() - 1 - jj, k = dz > 0 ? kk : n.z() - 1 - kk;
+          float a[3] = {std::min(at(i - 1, j, k), at(i + 1, j, k)), std::min(at(i, j - 1, k), at(i, j + 1, k)),
+                        std::min(at(i, j, k - 1), at(i, j, k + 1))};
+          std::sort(a, a + 3);
+          if (a[0] == kFar) continue;
+          // Solve the Godunov upwind update with the smallest neighbours first.
+          float u = a[0] + h;
+          if (u > a[1]) {
+            const float s = a[0] + a[1], q = 2.0f * h * h - (a[0] - a[1]) * (a[0] - a[1]);
+            u = 0.5f * (s + std::sqrt(std::max(q, 0.0f)));
+            if (u > a[2]) {
+              const float s3 = a[0] + a[1] + a[2];
+              const float q3 = s3 * s3 - 3.0f * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2] - h * h);
+              u = (s3 + std::sqrt(std::max(q3, 0.0f))) / 3.0f;
+            }
+          }
+          float& cur = t[sdf.index(i, j, k)];
+          cur = std::min(cur, u);
+        }
+  }
+  core::parallel_for(static_cast<std::int64_t>(total), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    float& v = sdf.value[i];
+    if (t[i] != kFar && t[i] > std::abs(v) + h) v = v < 0.0f ? -t[i] : t[i];
+  });
+}
+
+double enclosed_volume(const SdfGrid& sdf) {
+  const double h = sdf.spacing, cell = h * h * h;
+  return core::deterministic_sum(static_cast<std::int64_t>(sdf.value.size()), [&](std::int64_t i) {
+    return std::clamp(0.5 - double(sdf.value[static_cast<std::size_t>(i)]) / h, 0.0, 1.0);
+  }) * cell;
+}
+
+float automatic_spacing(const MeshField& field, std::size_t auto_count) {
+  const double n = double(std::max<std::size_t>(auto_count, 1));
+  if (field.encloses_volume()) return static_cast<float>(std::cbrt(field.volume() / n));
+  return static_cast<float>(std::sqrt(field.area() / (0.5 * std::sqrt(3.0) * n)));
+}
+
+std::vector<Vec3f> voxel_samples(const MeshField& field, float d) {
+  const Aabb box = field.bounds();
+  const Vec3f size = box.size();
+  // Cell centres of the whole cells that fit (a tolerance so that 1.0 / 0.1 counts as 10), centred in the
+  // box: a symmetric shape gets a symmetric set, and no sample sits on a face of a box-shaped target.
+  const Vec3i dims = ((size / d).array() + 1e-4f).floor().cast<int>().max(1);
+  const Vec3f origin = box.min + 0.5f * (size - (dims.cast<float>() - Vec3f::Ones()) * d);
+  std::vector<Vec3f> grid;
+  grid.reserve(static_cast<std::size_t>(dims.x()) * dims.y() * dims.z());
+  for (int k = 0; k < dims.z(); ++k)
+    for (int j = 0; j < dims.y(); ++j)
+      for (int i = 0; i < dims.x(); ++i) grid.push_back(origin + Vec3f(float(i), float(j), float(k)) * d);
+  std::vector<std::uint8_t> in(grid.size());
+  field.inside(grid, in);
+  std::vector<Vec3f> out;
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    if (in[i]) out.push_back(grid[i]);
+  return out;
+}
+
+std::vector<Vec3f> random_interior_points(const SdfGrid& sdf, const Aabb& box, std::size_t count, std::uint64_t seed) {
+  std::vector<Vec3f> out;
+  out.reserve(count);
+  const Vec3f lo = box.min, size = box.size();
+  const int T = core::thread_count();
+  std::vector<std::vector<Vec3f>> batch(static_cast<std::size_t>(4 * T));
+  for (std::uint64_t first = 0; out.size() < count; first += batch.size()) {
+    // A batch of streams in parallel, appended in stream order: deterministic for any thread count.
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::int64_t b = 0; b < static_cast<std::int64_t>(batch.size()); ++b) {
+      auto& pts = batch[static_cast<std::size_t>(b)];
+      pts.clear();
+      Rng rng(seed, first + static_cast<std::uint64_t>(b));
+      for (std::size_t k = 0; k < kChunk; ++k) {
+        const Vec3f u(rng.uniform(), rng.uniform(), rng.uniform());
+        const Vec3f p = lo + u.cwiseProduct(size);
+        if (sdf.distance(p) < 0.0f) pts.push_back(p);
+      }
+    }
+    for (const auto& pts : batch)
+      for (const auto& p : pts)
+        if (out.size() < count) out.push_back(p);
+    if (first > 1'000'000'000ull) break;  // a target of no volume at all: the caller checks the count
+  }
+  return out;
+}
+
+std::vector<Vec3f> random_surface_points(const io::TriangleMesh& mesh, std::size_t count, std::uint64_t seed) {
+  // Area-weighted triangle choice by binary search in the cumulative areas, then a uniform point.
+  std::vector<double> cdf(mesh.triangles.size());
+  double total = 0.0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const Vec3f &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+    const double area = 0.5 * double((b - a).cross(c - a).norm());
+    total += std::isfinite(area) ? area : 0.0;
+    cdf[t] = total;
+  }
+  std::vector<Vec3f> out(count);
+  if (total <= 0.0) return {};
+  const auto chunks = static_cast<std::int64_t>((count + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    Rng rng(seed, 0xC0FFEE00000ull + static_cast<std::uint64_t>(c));
+    const std::size_t b = static_cast<std::size_t>(c) * kChunk, e = std::min(count, b + kChunk);
+    for (std::size_t i = b; i < e; ++i) {
+      const double r = double(rng.uniform()) * total;
+      const auto t = static_cast<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), r) - cdf.begin());
+      const auto& tri = mesh.triangles[std::min(t, cdf.size() - 1)];
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1.0f) {
+        u = 1.0f - u;
+        v = 1.0f - v;
+      }
+      const Vec3f &a = mesh.vertices[tri[0]], &bb = mesh.vertices[tri[1]], &cc = mesh.vertices[tri[2]];
+      out[i] = a + u * (bb - a) + v * (cc - a);
+    }
+  }
+  return out;
+}
+
+Result<ControlSet> sample_target(const io::TriangleMesh& mesh, const SamplingParams& params, std::uint8_t target,
+                                 SampleReport* report, core::Progress& progress) {
+  FF_CHECK(params.validate());
+  core::Stopwatch watch;
+  SampleReport rep;
+  FF_TRY(MeshField field, MeshField::build(mesh));
+  rep.t_field = watch.seconds();
+  rep.volume = field.volume();
+  rep.area = field.area();
+  rep.method = params.method;
+  if (!field.encloses_volume() && params.method != Method::Surface) {
+    rep.warnings.push_back(fmt::format(
+        "the mesh encloses no volume (an open sheet or a shell with large holes): sampled as a surface shell "
+        "instead of {}", method_name(params.method)));
+    rep.method = Method::Surface;
+  }
+  const bool volume = rep.method != Method::Surface;
+  const float d = params.spacing > 0.0f ? params.spacing : automatic_spacing(field, params.auto_count);
+  rep.spacing = d;
+  if (!(d > 0.0f) || !std::isfinite(d))
+    return input_error(fmt::format("the target has no usable size (volume {:g} m³, area {:g} m²)", rep.volume, rep.area));
+  auto too_many = [&](double estimate) {
+    return param_error(fmt::format("sampling.spacing = {:g} m would make about {:.0f} samples, more than the limit of {} "
+                                   "(sampling.max_samples); use a larger spacing",
+                                   d, estimate, params.max_samples));
+  };
+  // A first check on the mesh's own volume, before the grid (whose size follows the spacing) is built.
+  if (const double rough = volume ? rep.volume / (double(d) * d * d) : surface_count(rep.area, d);
+      rough > 1.5 * double(params.max_samples))
+    return too_many(rough);
+  std::optional<SdfGrid> sdf;
+  if (volume) {
+    progress.begin("signed distance grid", 1);
+    FF_TRY(SdfGrid grid, SdfGrid::build(field, sdf_spacing(field.bounds(), d), 2.0f * d));
+    ignore_hidden_surfaces(grid);
+    sdf = std::move(grid);
+    progress.end();
+    rep.t_sdf = watch.seconds() - rep.t_field;
+    // The volume the samples fill, from the grid (a smoothed step per node): unlike the mesh's signed
+    // volume it counts overlapping parts once and is not fooled by holes.
+    rep.volume = enclosed_volume(*sdf);
+  }
+  const double estimate = volume ? rep.volume / (double(d) * d * d) : surface_count(rep.area, d);
+  if (estimate > double(params.max_samples)) return too_many(estimate);
+  const auto n = static_cast<std::size_t>(std::llround(estimate));
+  if (n < 1)
+    return input_error(fmt::format("the target ({:g} m³) holds no sample at spacing {:g} m; use a smaller spacing",
+                                   rep.volume, d));
+
+  std::vector<Vec3f> x;
+  std::vector<float> depth;
+  switch (rep.method) {
+    case Method::Voxel:
+      x = voxel_samples(field, d);
+      break;
+    case Method::BlueNoise: {
+      rep.candidates = 3 * n;
+      const auto cand = random_interior_points(*sdf, field.bounds(), rep.candidates, params.seed);
+      if (cand.size() < n)
+        return input_error(fmt::format("the target's volume could not be sampled ({} of {} interior points found)",
+                                       cand.size(), n));
+      EliminationParams ep;
+      ep.d_max = static_cast<float>(2.0 * volume_r_max(rep.volume, n));
+      const auto keep = eliminate_samples(cand, n, ep, progress);
+      x.reserve(keep.size());
+      for (Index k : keep) x.push_back(cand[k]);
+      RelaxParams rp;
+      rp.spacing = d;
+      rp.steps = params.relax_steps;
+      double t = watch.seconds();
+      rep.t_init = t - rep.t_sdf - rep.t_field;
+      relax_samples(x, *sdf, rp, progress);
+      rep.t_relax = watch.seconds() - t;
+      t = watch.seconds();
+      // The acceptance rules of a blue-noise set, made exact: nothing closer than 0.85 d, and thin parts
+      // the relaxation emptied get samples back (typically a handful per ten thousand).
+      const auto surface_points = static_cast<std::size_t>(std::min(64.0 * rep.area / (double(d) * d), 8.0 * double(n)));
+      const auto surface = random_surface_points(mesh, surface_points, params.seed ^ 0x5EEDull);
+      rep.repaired_dropped = enforce_spacing(x, *sdf, 0.85f * d, surface, &rep.repaired_added);
+      rep.t_repair = watch.seconds() - t;
+      break;
+    }
+    case Method::Surface: {
+      rep.candidates = 4 * n;
+      const auto cand = random_surface_points(mesh, rep.candidates, params.seed);
+      EliminationParams ep;
+      ep.d_max = static_cast<float>(2.0 * surface_r_max(rep.area, n));
+      const auto keep = eliminate_samples(cand, n, ep, progress);
+      x.reserve(keep.size());
+      for (Index k : keep) x.push_back(cand[k]);
+      break;
+    }
+  }
+  const std::size_t before = x.size();
+  x = drop_sparse(std::move(x), params.sparse, params.seed);
+  rep.dropped = before - x.size();
+  if (x.empty())
+    return input_error(rep.dropped ? "the sparse-sampling options removed every sample"
+                                   : "the target holds no sample at this spacing; use a smaller spacing");
+
+  ControlSet set;
+  set.target = target;
+  set.spacing = d;
+  set.resize(x.size());
+  std::copy(x.begin(), x.end(), set.position.begin());
+  depth.assign(x.size(), 0.0f);
+  if (sdf)
+    core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) {
+      depth[static_cast<std::size_t>(i)] = std::max(0.0f, -sdf->distance(x[static_cast<std::size_t>(i)]));
+    });
+  WeightParams wp{params.support_factor, params.phi_offset, params.rest_density};
+  const double t_w = watch.seconds();
+  FF_CHECK(compute_weights(set, depth, wp));
+  rep.t_weights = watch.seconds() - t_w;
+  rep.samples = set.size();
+  rep.seconds = watch.seconds();
+  if (report) *report = std::move(rep);
+  return set;
+}
+
+}  // namespace ff::sampling

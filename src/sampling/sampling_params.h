@@ -1,0 +1,45 @@
+#pragma once
+// Parameters of target sampling (METHOD.md §a.1–§a.2, §c.3–§c.5), with documented defaults, units and
+// ranges. JSON keys in scene files are the field names.
+#include "core/error.h"
+#include "core/types.h"
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+namespace ff::sampling {
+
+enum class Method {
+  BlueNoise,  ///< Yuksel sample elimination inside the volume, then SPH relaxation (default)
+  Voxel,      ///< cubic lattice inside the volume (the paper's comparison sampler, PBFC's)
+  Surface,    ///< blue noise on the triangles (thin shells, boundary layers)
+};
+std::string_view method_name(Method m);
+std::optional<Method> parse_method(std::string_view name);
+
+/// Samples dropped on purpose, to test a controller's robustness to sampling gaps (paper Fig. 3).
+struct SparseParams {
+  float drop_fraction = 0.0f;      ///< fraction of samples removed at random (seeded). [0, 0.99]
+  std::vector<Aabb> drop_boxes;    ///< every sample inside one of these boxes is removed (metres, target space)
+  Status validate(std::string_view path = "sampling.sparse") const;
+  bool active() const { return drop_fraction > 0.0f || !drop_boxes.empty(); }
+};
+
+struct SamplingParams {
+  Method method = Method::BlueNoise;
+  float spacing = 0.0f;            ///< d_c, m; 0 = automatic: about `auto_count` samples in the target. [0, 1e3]
+  std::size_t auto_count = 10'000; ///< samples aimed at when spacing is automatic. [100, 1e8]
+  std::uint64_t seed = 1;          ///< random seed (results are deterministic for a seed)
+  int relax_steps = 100;           ///< SPH relaxation steps of the blue-noise sampler. [0, 10000]
+  float support_factor = 4.0f;     ///< H_c = support_factor · d_c (METHOD §0: 4d). [1.5, 8]
+  float phi_offset = 0.05f;        ///< c of eq. 4 (paper: 0 < c < 0.1). [0, 1]
+  float rest_density = 1000.0f;    ///< ρ0 of the fluid the controls are calibrated to, kg/m³. (0, 1e5]
+  std::size_t max_samples = 20'000'000;  ///< refuse to make more samples than this. [1, 1e9]
+  SparseParams sparse;
+
+  Status validate(std::string_view path = "sampling") const;
+};
+
+}  // namespace ff::sampling

@@ -1,0 +1,40 @@
+#pragma once
+// Procedural test meshes for the sampling stage (libigl test_common idea: families of shapes, each with a known
+// inside): all closed ones are watertight, welded (shared vertices) and wound CCW seen from outside.
+#include "core/error.h"
+#include "io/triangle_mesh.h"
+
+namespace ff::test {
+
+/// Latitude-longitude sphere centred at the origin: `segments` around, segments / 2 bands, single-vertex poles.
+io::TriangleMesh uv_sphere(float radius, int segments);
+/// Box centred at the origin, each face split into n × n quads.
+io::TriangleMesh box(const Vec3f& half_extents, int n = 1);
+/// Torus around the y axis: tube centre radius `major`, tube radius `minor`, n segments around y, m around the tube.
+io::TriangleMesh torus(float major, float minor, int n, int m);
+/// A thin-walled vase: a curved outer profile revolved about y, hollowed from the top with a wall (and floor)
+/// of `wall` m, closed at the lip. Height `height`, widest radius `radius`.
+io::TriangleMesh vase(float height = 1.0f, float radius = 0.35f, float wall = 0.05f, int segments = 48,
+                      int profile_points = 24);
+/// Two uv spheres of radius `radius` centred at (±offset/2, 0, 0), intersecting when offset < 2·radius; two
+/// components in one mesh, not stitched.
+io::TriangleMesh two_overlapping_spheres(float radius = 0.5f, float offset = 0.5f, int segments = 32);
+/// uv_sphere(radius, segments) without the k triangles nearest to (radius, 0, 0): a small hole.
+io::TriangleMesh sphere_with_hole(int k, float radius = 1.0f, int segments = 32);
+/// The upper half of uv_sphere (y ≥ 0), open at the equator.
+io::TriangleMesh hemisphere(float radius, int segments);
+/// A flat n × n grid of quads in the xz plane (y = 0) over [−size/2, size/2]², normals +y.
+io::TriangleMesh plane_sheet(int n, float size = 1.0f);
+
+/// Every triangle wound the other way.
+io::TriangleMesh flip(io::TriangleMesh mesh);
+/// Both meshes in one (b's indices shifted; no welding).
+io::TriangleMesh merge(const io::TriangleMesh& a, const io::TriangleMesh& b);
+/// Every vertex moved by t.
+io::TriangleMesh translate(io::TriangleMesh mesh, const Vec3f& t);
+
+/// The Stanford bunny from the npm package `bunny` (positions/cells arrays): read from $FF_BUNNY_JSON when set,
+/// else <source>/node_modules/bunny/index.js. An Input error says how to install it when it is missing.
+Result<io::TriangleMesh> stanford_bunny();
+
+}  // namespace ff::test
