@@ -19,17 +19,17 @@
 // in double: q may be within a rounding error of the triangle, where float would lose the sign.
 #include "sampling/mesh_field.h"
 
-#include <fmt/format.h>
+#include "core/parallel.h"
 
+#include <fmt/format.h>
 #include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <numbers>
 #include <numeric>
 #include <tuple>
-
-#include "core/parallel.h"
 
 namespace ff::sampling {
 namespace {

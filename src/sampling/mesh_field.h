@@ -24,16 +24,16 @@
 //
 // Determinism: build() is serial; every query is a pure function of the point, so the parallel batch queries
 // give the same bits for any thread count.
+#include "core/error.h"
+#include "core/types.h"
+#include "io/triangle_mesh.h"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <span>
 #include <vector>
-
-#include "core/error.h"
-#include "core/types.h"
-#include "io/triangle_mesh.h"
 
 namespace ff::sampling {
 

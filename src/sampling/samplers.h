@@ -1,6 +1,6 @@
 #pragma once
 // Target sampling (paper §3.2, METHOD.md §a.1): a mesh becomes the control particles of one target.
-//   blue-noise (default)  N = V/d³ candidates kept from 3N random interior points by sample elimination
+//   blue-noise (default)  N = V/d³ samples kept from 2N random interior points by sample elimination
 //                         (Yuksel 2015), then SPH relaxation (relax.h) — even spacing up to the surface;
 //   voxel                 cubic lattice of spacing d, cell centres inside (winding number);
 //   surface               N = A/(√3/2 d²) samples kept from 4N random surface points by sample elimination.

@@ -1,19 +1,18 @@
 #include "sampling/sdf_grid.h"
 
-#include <fmt/format.h>
-
-#include <Eigen/Geometry>
-#include <algorithm>
-#include <atomic>
-#include <bit>
-#include <cassert>
-#include <cmath>
-#include <cstdint>
-#include <limits>
-
 #include "core/parallel.h"
 #include "core/params.h"
 #include "core/timer.h"
+
+#include <fmt/format.h>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
 
 namespace ff::sampling {
 namespace {
@@ -362,7 +361,8 @@ Result<SdfGrid> SdfGrid::build(const MeshField& field, float spacing, float marg
 // Trilinear interpolation and its exact derivative; outside the box, value(clamp(p)) + |p − clamp(p)|, whose
 // gradient along a clamped axis is the unit offset from the box.
 SdfGrid::Sample SdfGrid::sample(const Vec3f& p) const {
-  assert(p.allFinite());
+  // A NaN would reach the float-to-int casts below (undefined behaviour): answer NaN instead.
+  if (!p.allFinite()) return {std::numeric_limits<float>::quiet_NaN(), Vec3f::Zero()};
   const Vec3f g = (p - origin) / spacing;
   const Vec3f top = (dims - Vec3i::Ones()).cast<float>();
   const Vec3f gc = g.cwiseMax(Vec3f::Zero()).cwiseMin(top);

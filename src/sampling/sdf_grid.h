@@ -16,13 +16,13 @@
 // of the bunny at diagonal/256).
 // Determinism: every phase is a gather over nodes or cells in a fixed order, so the grid is identical for any
 // thread count.
-#include <cstddef>
-#include <vector>
-
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
 #include "sampling/mesh_field.h"
+
+#include <cstddef>
+#include <vector>
 
 namespace ff::sampling {
 
@@ -59,7 +59,7 @@ struct SdfGrid {
     Vec3f gradient;
   };
   /// Trilinear interpolation of the node values. Outside the grid box: the value at the nearest box point plus
-  /// the distance to the box (positive as long as the boundary nodes are). p must be finite.
+  /// the distance to the box (positive as long as the boundary nodes are). NaN distance for a non-finite p.
   Sample sample(const Vec3f& p) const;
   float distance(const Vec3f& p) const { return sample(p).distance; }
   /// The outward unit normal direction ∇d/|∇d| (zero where the interpolant is flat, e.g. at a medial point).

@@ -2,13 +2,17 @@
 // properties over a family of shapes against independent oracles: ray parity on closed meshes, the O(n) winding
 // number sum, analytic spheres, brute-force closest points; then holes, overlaps, flipped parts, open sheets,
 // the Stanford bunny (open at the bottom), the grid against exact distances, and thread-count independence.
+#include "io/load_mesh.h"
 #include "sampling/mesh_field.h"
+#include "sampling/sdf_grid.h"
+#include "support/shapes.h"
+#include "support/test_support.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <omp.h>
-
 #include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -21,11 +25,6 @@
 #include <tuple>
 #include <utility>
 #include <vector>
-
-#include "io/load_mesh.h"
-#include "sampling/sdf_grid.h"
-#include "support/shapes.h"
-#include "support/test_support.h"
 
 // One source, two scales: sampling_test (label fast, also run under ASan) uses small meshes and few probes;
 // sampling_slow_test (label slow, release only) is built with FF_SAMPLING_FULL_SIZE and checks the acceptance

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -90,8 +91,21 @@ void check(const Case& c) {
   std::vector<float> sd(x.size());
   field->signed_distance(x, sd);
   float worst = -1e30f;
-  for (float s : sd) worst = std::max(worst, s);
+  for (std::size_t i = 0; i < sd.size(); ++i) {
+    if (sd[i] > 0.25f * d && std::getenv("FF_DEBUG"))
+      std::printf("outside %.3f d at (%.3f %.3f %.3f) winding %.3f\n", sd[i] / d, x[i].x(), x[i].y(), x[i].z(),
+                  field->winding_number(x[i]));
+    worst = std::max(worst, sd[i]);
+  }
   EXPECT_LE(worst, 0.25f * d) << "a sample is outside";
+
+  // Weights on a real set: ω in (0, 1], φ̃ in [c, 1 + c] reaching both ends.
+  const auto [wlo, whi] = std::minmax_element(set->weight.begin(), set->weight.end());
+  EXPECT_GT(*wlo, 0.0f);
+  EXPECT_LE(*whi, 1.0f);
+  const auto [plo, phi] = std::minmax_element(set->phi.begin(), set->phi.end());
+  EXPECT_NEAR(*plo, p.phi_offset, 1e-5f);
+  EXPECT_NEAR(*phi, 1.0f + p.phi_offset, 1e-5f);
 }
 
 TEST(SamplerQuality, Sphere) { check({"sphere", test::uv_sphere(0.5f, 64), 4000}); }

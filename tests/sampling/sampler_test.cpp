@@ -174,6 +174,17 @@ TEST(Samplers, TooManySamplesIsAClearError) {
   EXPECT_NE(set.error().message.find("about 7999"), std::string::npos) << set.error().message;  // 8 m³ / 1 mm³
 }
 
+TEST(Samplers, ClosedMeshWithoutVolumeIsAClearError) {
+  // A tetrahedron whose four corners lie in one plane: closed (every edge has two faces), no face
+  // degenerate, zero volume.
+  io::TriangleMesh flat;
+  flat.vertices = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(1, 0, 1), Vec3f(0, 0, 1)};
+  flat.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
+  auto set = sample_target(flat, SamplingParams{});
+  ASSERT_FALSE(set.has_value());
+  EXPECT_NE(set.error().message.find("encloses no volume"), std::string::npos) << set.error().message;
+}
+
 TEST(Samplers, EmptyMeshIsAClearError) {
   io::TriangleMesh empty;
   auto set = sample_target(empty, SamplingParams{});

@@ -1,5 +1,7 @@
 #include "support/shapes.h"
 
+#include "support/test_support.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -13,8 +15,6 @@
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include "support/test_support.h"
 
 namespace ff::test {
 namespace {
