@@ -9,6 +9,7 @@
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -129,6 +130,23 @@ TEST(Samplers, BlueNoiseSphereIsSpreadInsideAndDeterministic) {
   auto c = sample_target(mesh, p);
   ASSERT_TRUE(c.has_value());
   EXPECT_NE(a->position, c->position);
+}
+
+TEST(Samplers, BlueNoiseIsIndependentOfTheThreadCount) {
+  const auto mesh = test::torus(0.5f, 0.2f, 48, 24);
+  SamplingParams p;
+  p.auto_count = 4000;  // above the serial cut-off of the parallel loops
+  p.relax_steps = 20;
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  auto a = sample_target(mesh, p);
+  omp_set_num_threads(std::max(2, saved));
+  auto b = sample_target(mesh, p);
+  omp_set_num_threads(saved);
+  ASSERT_TRUE(a.has_value() && b.has_value());
+  EXPECT_EQ(a->position, b->position);
+  EXPECT_EQ(a->weight, b->weight);
+  EXPECT_EQ(a->density, b->density);
 }
 
 TEST(Samplers, OpenSheetBecomesAShellWithAWarning) {
