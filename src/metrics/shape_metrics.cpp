@@ -1,0 +1,174 @@
+#include "metrics/shape_metrics.h"
+
+#include "core/parallel.h"
+#include "sampling/mesh_field.h"
+#include "sampling/samplers.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+namespace ff::metrics {
+namespace {
+
+// The SDF grid resolution: half the control spacing (as the sampler's grid, so thin parts the samples
+// reach are resolved), coarser when the box would need more than ~64 M nodes (256 MiB).
+float sdf_spacing(const Aabb& box, float margin, float d) {
+  const Vec3f size = box.size() + Vec3f::Constant(2.0f * margin);
+  float s = 0.5f * d;
+  while (double(size.x() / s) * double(size.y() / s) * double(size.z() / s) > 64e6) s *= 1.25f;
+  return s;
+}
+
+// Queries per work item. Work is handed out dynamically: queries that fall back to a tree (splashed
+// particles, holes) cluster in index ranges and cost ~10× a grid answer. Each item writes only its own slots,
+// so the results do not depend on who runs it.
+constexpr std::int64_t kQueryChunk = 256;
+
+// Runs f(begin, end) over [0, n) in chunks of kQueryChunk, in parallel.
+template <class F>
+void for_each_chunk(std::int64_t n, F&& f) {
+  const std::int64_t chunks = (n + kQueryChunk - 1) / kQueryChunk;
+#pragma omp parallel for schedule(dynamic) if (n >= core::kMinParallel)
+  for (std::int64_t c = 0; c < chunks; ++c) f(c * kQueryChunk, std::min(n, (c + 1) * kQueryChunk));
+}
+
+}  // namespace
+
+Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<const Vec3f> controls,
+                                       float control_spacing) {
+  const float d = control_spacing;
+  if (!(d > 0.0f) || !std::isfinite(d))
+    return param_error(fmt::format("metrics: control spacing {:g} m is not a positive length", d));
+  if (controls.empty()) return input_error("metrics: the target has no control samples");
+  Aabb box;
+  for (const Vec3f& c : controls) {
+    if (!c.allFinite()) return input_error("metrics: a control sample has a non-finite position");
+    box.extend(c);
+  }
+  // L normalises E; a target whose samples span nothing has no size to normalise by.
+  const float diagonal = box.size().norm();
+  if (!(diagonal > 0.0f))
+    return input_error("metrics: the control samples span no extent (a single point); E would be undefined");
+
+  FF_TRY(sampling::MeshField field, sampling::MeshField::build(mesh));
+  const float margin = 3.0f * d;
+  FF_TRY(sampling::SdfGrid grid, sampling::SdfGrid::build(field, sdf_spacing(field.bounds(), margin, d), margin));
+  sampling::ignore_hidden_surfaces(grid);
+
+  TargetShape shape;
+  shape.sdf_ = std::move(grid);
+  shape.grid_ = PointGrid(controls, d, box);
+  shape.controls_ = PointTree(controls);
+  shape.box_ = box;
+  shape.diagonal_ = diagonal;
+  shape.control_spacing_ = d;
+  return shape;
+}
+
+float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {
+  const float d2 = grid_.nearest2(rest_point);
+  return std::sqrt(std::isnan(d2) ? controls_.nearest(rest_point).distance2 : d2);
+}
+
+std::size_t TargetShape::bytes() const {
+  return sizeof(*this) - sizeof(sdf_) - sizeof(grid_) - sizeof(controls_) + sdf_.bytes() + grid_.bytes() +
+         controls_.bytes();
+}
+
+FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,
+                     std::span<const std::uint8_t> target_ids, std::span<const std::uint8_t> controlled,
+                     float particle_radius, const Eigen::Affine3f& rest_from_world, float world_scale) {
+  assert(target_ids.size() == positions.size() && controlled.size() == positions.size());
+  assert(world_scale > 0.0f && std::isfinite(world_scale));
+  const std::size_t total = std::min({positions.size(), target_ids.size(), controlled.size()});
+
+  // The target's fluid in the rest frame, in input order (a serial pass: a copy, ~1 ns per particle).
+  std::vector<Vec3f> x;
+  std::vector<std::uint8_t> ctrl;
+  for (std::size_t i = 0; i < total; ++i)
+    if (target_ids[i] == target_id && positions[i].allFinite()) {
+      x.push_back(rest_from_world * positions[i]);
+      ctrl.push_back(controlled[i] != 0 ? 1 : 0);
+    }
+
+  FrameMetrics m;
+  m.fluid = x.size();
+  m.controlled = static_cast<std::size_t>(std::count(ctrl.begin(), ctrl.end(), std::uint8_t{1}));
+  if (m.fluid == 0) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    m.e_fwd = m.e_bwd = m.error_rate = m.e_fwd_all = m.error_spacings = nan;
+    return m;
+  }
+  const auto n = static_cast<std::int64_t>(m.fluid);
+  const double s = world_scale;
+  const double r = particle_radius;
+
+  // Forward: each fluid particle's distance to the nearest sample, and its signed distance.
+  std::vector<float> to_sample(m.fluid), sdf(m.fluid);
+  for_each_chunk(n, [&](std::int64_t begin, std::int64_t end) {
+    for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
+      to_sample[i] = shape.nearest_sample_distance(x[i]);
+      sdf[i] = shape.signed_distance(x[i]);
+    }
+  });
+
+  // Backward: each sample's distance to the nearest fluid particle, in the samples' cell order. A grid of one
+  // fluid spacing over the samples' box (+2 cells) answers where the fluid is near; the rest go to a tree.
+  const PointGrid& samples = shape.control_grid();
+  const auto m_samples = static_cast<std::int64_t>(samples.points().size());
+  const float fluid_cell = r > 0.0 && std::isfinite(r) ? float(2.0 * r / s) : shape.control_spacing();
+  Aabb region = shape.sample_bounds();
+  region.min.array() -= 2.0f * fluid_cell;
+  region.max.array() += 2.0f * fluid_cell;
+  const PointGrid fluid_grid(x, fluid_cell, region);
+  std::vector<float> to_fluid(samples.points().size());
+  for_each_chunk(m_samples, [&](std::int64_t begin, std::int64_t end) {
+    for (auto j = static_cast<std::size_t>(begin); j < static_cast<std::size_t>(end); ++j)
+      to_fluid[j] = fluid_grid.nearest2(samples.points()[j]);
+  });
+  std::vector<Index> unresolved;
+  for (std::size_t j = 0; j < to_fluid.size(); ++j)
+    if (std::isnan(to_fluid[j])) unresolved.push_back(static_cast<Index>(j));
+  if (!unresolved.empty()) {
+    const PointTree fluid(x);
+    for_each_chunk(static_cast<std::int64_t>(unresolved.size()), [&](std::int64_t begin, std::int64_t end) {
+      Index hint = kInvalidIndex;  // consecutive unresolved samples are near each other: each seeds the next
+      for (std::int64_t k = begin; k < end; ++k) {
+        const Index j = unresolved[static_cast<std::size_t>(k)];
+        const PointTree::Nearest nb = fluid.nearest(samples.points()[j], hint);
+        hint = nb.slot;
+        to_fluid[j] = nb.distance2;
+      }
+    });
+  }
+  core::parallel_for(m_samples, [&](std::int64_t j) {
+    to_fluid[static_cast<std::size_t>(j)] = std::sqrt(to_fluid[static_cast<std::size_t>(j)]);
+  });
+
+  auto at = [](const std::vector<float>& v, std::int64_t i) { return double(v[static_cast<std::size_t>(i)]); };
+  auto is_ctrl = [&](std::int64_t i) { return ctrl[static_cast<std::size_t>(i)] != 0; };
+  const double sum_all = core::deterministic_sum(n, [&](std::int64_t i) { return at(to_sample, i); });
+  const double sum_ctrl =
+      core::deterministic_sum(n, [&](std::int64_t i) { return is_ctrl(i) ? at(to_sample, i) : 0.0; });
+  const double inside = core::deterministic_sum(n, [&](std::int64_t i) { return at(sdf, i) * s <= r ? 1.0 : 0.0; });
+  const double splash =
+      core::deterministic_sum(n, [&](std::int64_t i) { return at(sdf, i) * s > 2.0 * r ? 1.0 : 0.0; });
+  const double sum_bwd = core::deterministic_sum(m_samples, [&](std::int64_t j) { return at(to_fluid, j); });
+
+  const double count = double(m.fluid);
+  m.e_fwd_all = s * sum_all / count;
+  m.e_fwd = m.controlled > 0 ? s * sum_ctrl / double(m.controlled) : m.e_fwd_all;
+  m.e_bwd = s * sum_bwd / double(m_samples);
+  const double L = s * double(shape.diagonal());
+  m.error_rate = 100.0 * (m.e_fwd + m.e_bwd) / (2.0 * L);
+  m.error_spacings = 0.5 * (m.e_fwd + m.e_bwd) / (2.0 * r);
+  m.inside_fraction = inside / count;
+  m.splash_fraction = splash / count;
+  return m;
+}
+
+}  // namespace ff::metrics
