@@ -25,6 +25,10 @@ Status SolverParams::validate(std::string_view p) const {
   FF_CHECK(check_range(p, "scorr_k", scorr_k, 0.0, 1.0));
   FF_CHECK(check_range(p, "scorr_n", scorr_n, 1, 8));
   FF_CHECK(check_range(p, "scorr_dq", scorr_dq, 0.0, 1.0, Bound::Open, Bound::Open));
+  FF_CHECK(check_range(p, "surface_tension", surface_tension, 0.0, 10.0));
+  FF_CHECK(check_range(p, "surface_tension_samples", surface_tension_samples, 1.0, 1e6));
+  FF_CHECK(check_range(p, "drag", drag, 0.0, 10.0));
+  FF_CHECK(check_range(p, "air_density", air_density, 0.0, 100.0, Bound::Open));
   return {};
 }
 

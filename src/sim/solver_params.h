@@ -27,6 +27,15 @@ struct SolverParams {
   float scorr_k = 0.1f;            ///< tensile-instability strength k (s_corr / S_0). [0, 1]
   int scorr_n = 4;                 ///< s_corr exponent n. [1, 8]
   float scorr_dq = 0.2f;           ///< |Δq| as a multiple of H_p. (0, 1)
+  // External forces of the seed paper (METHOD.md §a.4 eq. 13–14), added after XSPH (sim/surface_tension.h, sim/drag.h).
+  float surface_tension = 0.05f;   ///< σ of Zorilla et al.: a = −(σ/m) κ n̂ on surface particles, at the reference
+                                   ///< spacing 0.05 m, scaled by (d/0.05)² (pbf_solver.cpp says why); 0 = off. [0, 10]
+                                   ///< A force σκ per particle (no area factor): σ/m ∝ 1/d³ (sim/surface_tension.h).
+  float surface_tension_samples = 10000.0f;  ///< C_sd, Monte-Carlo points per second: N = ⌊C_sd·Δt⌋ (≥ 1) per
+                                             ///< surface particle and sub-step (83 at Δt = 1/120 s). [1, 1e6];
+                                             ///< large N destabilises fine spacings (sim/surface_tension.h)
+  float drag = 0.01f;              ///< s, Gissler et al. drag scale: a = s·½ρ_a‖v_rel‖v_rel C_D A/m; 0 = off. [0, 10]
+  float air_density = 1.2931f;     ///< ρ_a, kg/m³ (seed value). (0, 100]
 
   float spacing() const { return 2.0f * particle_radius; }
   float support() const { return support_factor * particle_radius; }
