@@ -1,5 +1,6 @@
 #include "app/run_pipeline.h"
 
+#include "app/auto_scene.h"
 #include "app/targets.h"
 
 #include "core/memory.h"
@@ -11,6 +12,9 @@
 #include "sim/checkpoint.h"
 #include "sim/emitter.h"
 #include "sim/pbf_solver.h"
+#include "control/registry.h"
+#include "metrics/shape_metrics.h"
+#include "metrics/summary.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -36,31 +40,102 @@ struct FrameRow {
   double density_error_mean = 0;  // mean of max(ρ/ρ0 − 1, 0)
   double density_error_max = 0;
   double peak_memory_mib = 0;
+  // Shape metrics (METHOD §d), N_c-weighted over the targets; NaN without targets.
+  std::size_t controlled = 0;
+  double error_rate = NAN, e_fwd = NAN, e_bwd = NAN, e_fwd_all = NAN, inside = NAN, splash = NAN;
+  double control_seconds = 0;     // wall-clock of the controller's hooks within step_seconds
 };
+
+/// One target's metrics in one frame (metrics_targets.csv).
+struct TargetRow {
+  int frame = 0;
+  int target = 0;
+  metrics::FrameMetrics m;
+};
+
+// NaN is not JSON: metrics that are undefined are stored as null.
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+double num_of(const json& j) { return j.is_number() ? j.get<double>() : NAN; }
 
 json rows_to_json(const std::vector<FrameRow>& rows) {
   json a = json::array();
   for (const auto& r : rows)
     a.push_back({r.frame, r.time, r.particles, r.step_seconds, r.substeps, r.iterations, r.density_error_mean,
-                 r.density_error_max, r.peak_memory_mib});
+                 r.density_error_max, r.peak_memory_mib, r.controlled, num(r.error_rate), num(r.e_fwd), num(r.e_bwd),
+                 num(r.e_fwd_all), num(r.inside), num(r.splash), r.control_seconds});
   return a;
+}
+
+json target_rows_to_json(const std::vector<TargetRow>& rows) {
+  json a = json::array();
+  for (const auto& r : rows)
+    a.push_back({r.frame, r.target, r.m.fluid, r.m.controlled, num(r.m.error_rate), num(r.m.e_fwd), num(r.m.e_bwd),
+                 num(r.m.e_fwd_all), num(r.m.inside_fraction), num(r.m.splash_fraction), num(r.m.error_spacings)});
+  return a;
+}
+
+std::vector<TargetRow> target_rows_from_json(const json& a) {
+  std::vector<TargetRow> rows;
+  if (!a.is_array()) return rows;
+  for (const auto& e : a) {
+    TargetRow r;
+    r.frame = e[0].get<int>();
+    r.target = e[1].get<int>();
+    r.m.fluid = e[2].get<std::size_t>();
+    r.m.controlled = e[3].get<std::size_t>();
+    r.m.error_rate = num_of(e[4]);
+    r.m.e_fwd = num_of(e[5]);
+    r.m.e_bwd = num_of(e[6]);
+    r.m.e_fwd_all = num_of(e[7]);
+    r.m.inside_fraction = num_of(e[8]);
+    r.m.splash_fraction = num_of(e[9]);
+    r.m.error_spacings = num_of(e[10]);
+    rows.push_back(r);
+  }
+  return rows;
 }
 
 std::vector<FrameRow> rows_from_json(const json& a) {
   std::vector<FrameRow> rows;
   if (!a.is_array()) return rows;
-  for (const auto& e : a)
-    rows.push_back({e[0].get<int>(), e[1].get<double>(), e[2].get<std::size_t>(), e[3].get<double>(), e[4].get<int>(),
-                    e[5].get<long>(), e[6].get<double>(), e[7].get<double>(), e[8].get<double>()});
+  for (const auto& e : a) {
+    FrameRow r{e[0].get<int>(), e[1].get<double>(), e[2].get<std::size_t>(), e[3].get<double>(), e[4].get<int>(),
+               e[5].get<long>(), e[6].get<double>(), e[7].get<double>(), e[8].get<double>()};
+    if (e.size() >= 16) {
+      r.controlled = e[9].get<std::size_t>();
+      r.error_rate = num_of(e[10]);
+      r.e_fwd = num_of(e[11]);
+      r.e_bwd = num_of(e[12]);
+      r.e_fwd_all = num_of(e[13]);
+      r.inside = num_of(e[14]);
+      r.splash = num_of(e[15]);
+      if (e.size() >= 17) r.control_seconds = num_of(e[16]);
+    }
+    rows.push_back(r);
+  }
   return rows;
 }
 
 std::string metrics_csv(const std::vector<FrameRow>& rows) {
   std::string s =
-      "frame,time_s,particles,step_time_s,substeps,iterations,density_error_mean,density_error_max,peak_memory_mb\n";
+      "frame,time_s,particles,step_time_s,substeps,iterations,density_error_mean,density_error_max,peak_memory_mb,"
+      "controlled,error_rate_pct,e_fwd_m,e_bwd_m,e_fwd_all_m,inside_fraction,splash_fraction,control_time_s\n";
   for (const auto& r : rows)
-    s += fmt::format("{},{:.6f},{},{:.6f},{},{},{:.6g},{:.6g},{:.1f}\n", r.frame, r.time, r.particles, r.step_seconds,
-                     r.substeps, r.iterations, r.density_error_mean, r.density_error_max, r.peak_memory_mib);
+    s += fmt::format("{},{:.6f},{},{:.6f},{},{},{:.6g},{:.6g},{:.1f},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6f}\n", r.frame,
+                     r.time, r.particles, r.step_seconds, r.substeps, r.iterations, r.density_error_mean,
+                     r.density_error_max, r.peak_memory_mib, r.controlled, r.error_rate, r.e_fwd, r.e_bwd, r.e_fwd_all,
+                     r.inside, r.splash, r.control_seconds);
+  return s;
+}
+
+std::string target_metrics_csv(const std::vector<TargetRow>& rows) {
+  std::string s =
+      "frame,target,fluid,controlled,error_rate_pct,e_fwd_m,e_bwd_m,e_fwd_all_m,inside_fraction,splash_fraction,"
+      "error_spacings\n";
+  for (const auto& r : rows)
+    s += fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.frame, r.target, r.m.fluid,
+                     r.m.controlled, r.m.error_rate, r.m.e_fwd, r.m.e_bwd, r.m.e_fwd_all, r.m.inside_fraction,
+                     r.m.splash_fraction, r.m.error_spacings);
   return s;
 }
 
@@ -75,7 +150,9 @@ json scene_to_json(const io::Scene& s) {
                  {"gravity", v3(s.solver.gravity)},             {"rest_density", s.solver.rest_density},
                  {"viscosity", s.solver.viscosity},             {"vorticity", s.solver.vorticity},
                  {"epsilon", s.solver.epsilon},                 {"scorr_k", s.solver.scorr_k},
-                 {"scorr_n", s.solver.scorr_n},                 {"scorr_dq", s.solver.scorr_dq}};
+                 {"scorr_n", s.solver.scorr_n},                 {"scorr_dq", s.solver.scorr_dq},
+                 {"surface_tension", s.solver.surface_tension}, {"surface_tension_samples", s.solver.surface_tension_samples},
+                 {"drag", s.solver.drag},                       {"air_density", s.solver.air_density}};
   j["domain"] = {{"min", v3(s.domain.min)}, {"max", v3(s.domain.max)}};
   j["fluid"] = json::array();
   for (const auto& f : s.fluid) {
@@ -125,27 +202,66 @@ Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
 
 }  // namespace
 
-Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core::Progress& progress) {
+namespace {
+
+/// Per-frame shape metrics of every target, and their N_c-weighted aggregate into `row`.
+void measure_frame(const std::vector<metrics::TargetShape>& shapes, const sim::ParticleSet& p, float r, int frame,
+                   std::vector<std::uint8_t>& controlled, FrameRow& row, std::vector<TargetRow>& target_rows) {
+  if (shapes.empty()) return;
+  controlled.resize(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
+  double w = 0, e = 0, ef = 0, eb = 0, efa = 0, in = 0, sp = 0;
+  std::size_t ctrl = 0;
+  for (std::size_t t = 0; t < shapes.size(); ++t) {
+    const auto m = metrics::measure(shapes[t], static_cast<std::uint8_t>(t), p.position, p.target, controlled, r);
+    target_rows.push_back({frame, static_cast<int>(t), m});
+    const double nc = static_cast<double>(shapes[t].sample_count());
+    ctrl += m.controlled;
+    w += nc, e += nc * m.error_rate, ef += nc * m.e_fwd, eb += nc * m.e_bwd, efa += nc * m.e_fwd_all;
+    in += nc * m.inside_fraction, sp += nc * m.splash_fraction;
+  }
+  row.controlled = ctrl;
+  row.error_rate = e / w, row.e_fwd = ef / w, row.e_bwd = eb / w, row.e_fwd_all = efa / w;
+  row.inside = in / w, row.splash = sp / w;
+}
+
+/// The adaptive run length: the shape has formed and held when E(t) over the last `window` frames stays within
+/// a band of 0.05 percentage points plus 5 % of its mean, after at least `min_frames`.
+bool formed_and_held(const std::vector<FrameRow>& rows, int window, int min_frames) {
+  if (static_cast<int>(rows.size()) < std::max(window, min_frames) + 1) return false;
+  double lo = INFINITY, hi = -INFINITY, sum = 0;
+  for (std::size_t k = rows.size() - static_cast<std::size_t>(window); k < rows.size(); ++k) {
+    const double e = rows[k].error_rate;
+    if (!std::isfinite(e)) return false;
+    lo = std::min(lo, e), hi = std::max(hi, e), sum += e;
+  }
+  return hi - lo <= 0.05 + 0.05 * (sum / window);
+}
+
+}  // namespace
+
+Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, core::Progress& progress) {
   const fs::path out = opt.out_dir;
   const fs::path ckpt_dir = out / "checkpoint", ckpt_file = ckpt_dir / "state.ffck";
-  const int frames = opt.frames.value_or(scene.output.frames);
+  io::Scene scene = scene_in;
+  if (opt.controller) scene.controller.name = *opt.controller;
+  FF_CHECK(scene.controller.validate());
+
+  // Targets are loaded and checked first so that a bad mesh fails fast; a scene that names only its
+  // targets is completed from them (spacing, fluid, domain).
+  FF_TRY(auto geometry, load_targets(scene));
+  FF_CHECK(complete_scene(scene, geometry));
+  const bool run_until_formed = !opt.frames && scene.auto_frames && !geometry.empty();
+  const int frames = opt.frames.value_or(run_until_formed ? opt.max_auto_frames : scene.output.frames);
   if (!(frames >= 1 && frames <= 10'000'000))
     return param_error(fmt::format("--frames = {} is outside [1, 10000000]", frames));
 
-  // Targets are loaded and checked now so that a bad mesh fails fast; shape control (sampling and
-  // controllers) consumes them in later stages.
-  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
-    io::MeshLoadStats st;
-    FF_TRY(auto mesh, io::load_mesh(scene.targets[i].mesh, io::LoadOptions{scene.targets[i].transform}, &st));
-    spdlog::info("target {}: {} ({} vertices, {} triangles, {} degenerate dropped)", i,
-                 scene.targets[i].mesh.filename().string(), mesh.vertices.size(), mesh.triangles.size(),
-                 st.dropped_degenerate);
-  }
-
   // The fluid is made (and its size checked) before the output folder is touched.
   sim::ParticleSet initial;
-  if (!opt.resume || !fs::exists(ckpt_file))
+  if (!opt.resume || !fs::exists(ckpt_file)) {
     FF_CHECK(sim::fill_sources(scene.fluid, scene.domain, scene.solver.particle_radius, initial));
+    assign_targets(initial, geometry);
+  }
 
   // Inputs are all checked before the output folder is touched.
   FF_CHECK(io::ensure_writable_dir(out));
@@ -158,7 +274,8 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
   if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
   sp.rest_density = scene.solver.rest_density;
   json targets_json = json::array();
-  std::vector<sampling::ControlSet> controls;
+  std::vector<control::ControlTarget> controls;
+  std::vector<metrics::TargetShape> shapes;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), out / "cache", progress));
     for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
@@ -168,22 +285,26 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
       spdlog::info("target {}: {} control particles ({}, spacing {:g} m, {:.2f} s)", i, tc.set.size(),
                    sampling::method_name(tc.report.method), tc.report.spacing, tc.report.seconds);
     targets_json.push_back({{"mesh", scene.targets[i].mesh.string()}, {"control_particles", tc.set.size()},
-                            {"spacing", tc.set.spacing}, {"cached", tc.from_cache},
+                            {"spacing", tc.set.spacing}, {"volume", geometry[i].volume}, {"cached", tc.from_cache},
                             {"controls", fs::relative(tc.cache_file, out).string()}});
-    controls.push_back(std::move(tc.set));
+    auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
+    if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};
+    shapes.push_back(std::move(*shape));
+    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start)});
   }
-  if (!controls.empty())
-    spdlog::warn("this build has no shape controller yet: targets are sampled, but the fluid runs uncontrolled");
 
   sim::ParticleSet particles;
   std::vector<FrameRow> rows;
+  std::vector<TargetRow> target_rows;
   int next_frame = 1;
   double time = 0.0;
   std::vector<Vec3f> xs, vs;
-  std::vector<std::uint8_t> ts;
+  std::vector<std::uint8_t> ts, flags;
 
   bool resumed = false;
   if (opt.resume && fs::exists(ckpt_file)) {
+    if (const auto n = io::remove_stale_temp_files(out))
+      spdlog::info("removed {} partial file(s) left by the interrupted run", n);
     FF_TRY(auto bytes, read_bytes(ckpt_file));
     auto ck = sim::decode_checkpoint(bytes);
     if (!ck) return input_error(fmt::format("{}: {}", ckpt_file.string(), ck.error().message));
@@ -195,6 +316,7 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
     time = ck->time;
     const json extra = json::parse(ck->extra, nullptr, false);
     if (!extra.is_discarded() && extra.contains("rows")) rows = rows_from_json(extra["rows"]);
+    if (!extra.is_discarded() && extra.contains("target_rows")) target_rows = target_rows_from_json(extra["target_rows"]);
     resumed = true;
     spdlog::info("resuming from frame {} (t = {:.4f} s, {} particles)", next_frame, time, particles.size());
   } else if (opt.resume) {
@@ -203,17 +325,88 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
   if (!resumed) {
     particles = std::move(initial);
     FF_CHECK(write_frame(out, 0, particles, scene.output.velocity, xs, vs, ts));
-    rows.push_back({0, 0.0, particles.size(), 0.0, 0, 0, 0.0, 0.0, core::peak_rss_mib()});
+    FrameRow row{0, 0.0, particles.size(), 0.0, 0, 0, 0.0, 0.0, core::peak_rss_mib()};
+    measure_frame(shapes, particles, scene.solver.particle_radius, 0, flags, row, target_rows);
+    rows.push_back(row);
   }
   if (particles.size() == 0) return input_error("the scene creates no fluid particles");
 
   sim::PbfSolver solver(scene.solver, scene.domain);
-  sim::NoController controller;
-  spdlog::info("{} particles, d = {} m, H_p = {} m, rho0 = {:.1f} kg/m^3 (lattice-calibrated), {} threads",
+  control::ControlContext ctx{scene.solver.particle_radius, solver.particle_mass(), scene.solver.rest_density,
+                              scene.solver.gravity, scene.domain};
+  // A scene without targets has nothing to control: plain PBF whatever the controller setting.
+  control::ControllerSpec spec = scene.controller;
+  if (controls.empty()) spec.name = "none";
+  const std::size_t control_count = [&] {
+    std::size_t c = 0;
+    for (const auto& t : controls) c += t.set.size();
+    return c;
+  }();
+  FF_TRY(auto controller, control::make_controller(spec, std::move(controls), ctx));
+  spdlog::info("{} particles, d = {} m, H_p = {} m, rho0 = {:.1f} kg/m^3 (lattice-calibrated), controller {}, {} threads",
                particles.size(), scene.solver.spacing(), scene.solver.support(), solver.rest_density(),
-               core::thread_count());
+               controller->name(), core::thread_count());
 
   const double frame_dt = 1.0 / scene.output.fps;
+  auto totals = [&]() {
+    double peak = 0.0;
+    for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
+    json t = {{"particles", particles.size()},
+              {"control_particles", control_count},
+              {"controller", std::string(controller->name())},
+              {"frames", rows.empty() ? 0 : rows.back().frame},
+              {"simulated_seconds", rows.empty() ? 0.0 : rows.back().time},
+              {"mean_step_time_s", mean_step_seconds(rows)},
+              {"peak_memory_mb", peak},
+              {"threads", core::thread_count()},
+              {"rest_density", solver.rest_density()},
+              {"particle_mass", solver.particle_mass()}};
+    if (!shapes.empty() && !rows.empty()) {
+      std::vector<double> e, times;
+      for (const auto& r : rows) e.push_back(r.error_rate), times.push_back(r.time);
+      const auto sum = metrics::summarize(e, times);
+      const auto tail = metrics::tail_window(rows.size(), 0.2);
+      auto tail_mean = [&](auto field) {
+        std::vector<double> v;
+        for (const auto& r : rows) v.push_back(field(r));
+        return metrics::window_mean(v, tail);
+      };
+      const auto& last = rows.back();
+      t["error_rate_pct"] = num(sum.steady);
+      t["error_rate_final_pct"] = num(sum.final_value);
+      t["time_to_form_s"] = num(sum.time_to_form);
+      t["time_to_form_stable_s"] = num(sum.time_to_form_stable);
+      t["e_fwd_m"] = num(tail_mean([](const FrameRow& r) { return r.e_fwd; }));
+      t["e_bwd_m"] = num(tail_mean([](const FrameRow& r) { return r.e_bwd; }));
+      t["e_fwd_all_m"] = num(tail_mean([](const FrameRow& r) { return r.e_fwd_all; }));
+      t["inside_fraction"] = num(tail_mean([](const FrameRow& r) { return r.inside; }));
+      t["splash_fraction"] = num(tail_mean([](const FrameRow& r) { return r.splash; }));
+      t["controlled_final"] = last.controlled;
+      t["controlled_per_control"] = control_count ? double(last.controlled) / double(control_count) : 0.0;
+      json per = json::array();
+      double es_w = 0.0, es_n = 0.0;
+      for (std::size_t k = 0; k < shapes.size(); ++k) {
+        std::vector<double> ek, tk;
+        const TargetRow* lastk = nullptr;
+        for (const auto& r : target_rows)
+          if (r.target == static_cast<int>(k)) ek.push_back(r.m.error_rate), tk.push_back(r.frame * frame_dt), lastk = &r;
+        const auto sk = metrics::summarize(ek, tk);
+        per.push_back({{"target", k},
+                       {"error_rate_pct", num(sk.steady)},
+                       {"time_to_form_s", num(sk.time_to_form)},
+                       {"fluid", lastk ? lastk->m.fluid : 0},
+                       {"controlled", lastk ? lastk->m.controlled : 0},
+                       {"inside_fraction", lastk ? num(lastk->m.inside_fraction) : json(nullptr)},
+                       {"splash_fraction", lastk ? num(lastk->m.splash_fraction) : json(nullptr)},
+                       {"error_spacings", num(sk.steady * shapes[k].diagonal() / (100.0 * scene.solver.spacing()))}});
+        es_w += double(shapes[k].sample_count()) * sk.steady * shapes[k].diagonal() / (100.0 * scene.solver.spacing());
+        es_n += double(shapes[k].sample_count());
+      }
+      t["per_target"] = per;
+      t["error_spacings"] = num(es_w / es_n);
+    }
+    return t;
+  };
   auto write_report = [&](std::string_view status, std::string_view error) -> Status {
     json rep;
     rep["fluidform_version"] = FF_VERSION;
@@ -221,26 +414,20 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
     if (!error.empty()) rep["error"] = error;
     rep["scene"] = scene_to_json(scene);
     rep["targets"] = targets_json;
-    double peak = 0.0;
-    for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
-    rep["totals"] = {{"particles", particles.size()},
-                     {"frames", rows.empty() ? 0 : rows.back().frame},
-                     {"simulated_seconds", rows.empty() ? 0.0 : rows.back().time},
-                     {"mean_step_time_s", mean_step_seconds(rows)},
-                     {"peak_memory_mb", peak},
-                     {"threads", core::thread_count()},
-                     {"rest_density", solver.rest_density()},
-                     {"particle_mass", solver.particle_mass()}};
+    rep["totals"] = totals();
     FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics_csv(rows)));
+    if (!shapes.empty()) FF_CHECK(io::write_file_atomic(out / "metrics_targets.csv", target_metrics_csv(target_rows)));
     return io::write_file_atomic(out / "report.json", rep.dump(2) + "\n");
   };
 
-  progress.begin("simulating", static_cast<std::size_t>(frames));
+  progress.begin(run_until_formed ? "forming" : "simulating", static_cast<std::size_t>(frames));
   progress.tick(static_cast<std::size_t>(next_frame - 1));
   bool warned_cap = false;
+  int last_frame = next_frame - 1;
+  const int window = static_cast<int>(std::lround(scene.output.fps));  // 1 s of frames
   for (int f = next_frame; f <= frames; ++f) {
     core::Stopwatch watch;
-    auto stats = solver.advance(particles, time, frame_dt, controller);
+    auto stats = solver.advance(particles, time, frame_dt, *controller);
     const double seconds = watch.seconds();
     if (!stats) {
       progress.end();
@@ -255,23 +442,47 @@ Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& opt, core
     }
     time = f * frame_dt;
     FF_CHECK(write_frame(out, f, particles, scene.output.velocity, xs, vs, ts));
-    rows.push_back({f, time, particles.size(), seconds, stats->substeps, stats->times.iterations, stats->density_error_mean,
-                    stats->density_error_max, core::peak_rss_mib()});
-    if (scene.output.checkpoint_every > 0 && (f % scene.output.checkpoint_every == 0 || f == frames)) {
-      sim::Checkpoint ck{f + 1, time, scene.hash, json{{"rows", rows_to_json(rows)}}.dump(), particles};
+    FrameRow row{f, time, particles.size(), seconds, stats->substeps, stats->times.iterations, stats->density_error_mean,
+                 stats->density_error_max, core::peak_rss_mib()};
+    row.control_seconds = stats->times.control;
+    measure_frame(shapes, particles, scene.solver.particle_radius, f, flags, row, target_rows);
+    rows.push_back(row);
+    last_frame = f;
+    const bool done = run_until_formed && formed_and_held(rows, window, 2 * window);
+    if (scene.output.checkpoint_every > 0 && (f % scene.output.checkpoint_every == 0 || f == frames || done)) {
+      sim::Checkpoint ck{f + 1, time, scene.hash,
+                         json{{"rows", rows_to_json(rows)}, {"target_rows", target_rows_to_json(target_rows)}}.dump(),
+                         particles};
       FF_CHECK(io::write_file_atomic(ckpt_file, sim::encode_checkpoint(ck)));
       FF_CHECK(write_report("running", ""));
     }
     if (!progress.tick(static_cast<std::size_t>(f))) return Error{Error::Kind::Cancelled, "cancelled"};
+    if (done) break;
   }
   progress.end();
   FF_CHECK(write_report("ok", ""));
+  if (run_until_formed && last_frame == frames && !formed_and_held(rows, window, 2 * window))
+    spdlog::warn("the shape had not settled after {} frames (the cap); pass --frames to run longer", frames);
 
   RunSummary sum;
   sum.particles = particles.size();
-  sum.frames_written = frames + 1;
+  sum.frames_written = last_frame + 1;
   sum.mean_frame_seconds = mean_step_seconds(rows);
   sum.peak_memory_mib = core::peak_rss_mib();
+  sum.controller = std::string(controller->name());
+  if (!shapes.empty()) {
+    const json t = totals();
+    sum.has_targets = true;
+    sum.control_particles = control_count;
+    auto get = [&](const char* k) { return t.contains(k) && t[k].is_number() ? t[k].get<double>() : NAN; };
+    sum.error_rate = get("error_rate_pct");
+    sum.inside_fraction = get("inside_fraction");
+    sum.splash_fraction = get("splash_fraction");
+    sum.time_to_form = get("time_to_form_s");
+    sum.controlled = rows.back().controlled;
+    sum.e_fwd_all = get("e_fwd_all_m");
+    sum.error_spacings = get("error_spacings");
+  }
   return sum;
 }
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
 
 namespace ff::app {
 
@@ -13,6 +14,8 @@ struct RunOptions {
   std::filesystem::path out_dir = "fluidform-out";
   std::optional<int> frames;  ///< overrides scene.output.frames
   bool resume = false;        ///< continue from OUT/checkpoint/ if present
+  std::optional<std::string> controller;  ///< overrides scene.controller.name
+  int max_auto_frames = 600;  ///< cap of a run that stops once the shape has formed (no --frames, no output.frames)
 };
 
 /// What a finished run reports to the CLI.
@@ -21,6 +24,11 @@ struct RunSummary {
   int frames_written = 0;
   double mean_frame_seconds = 0.0;
   double peak_memory_mib = 0.0;
+  std::string controller;
+  // Shape metrics (METHOD §d), when the scene has targets.
+  bool has_targets = false;
+  std::size_t control_particles = 0, controlled = 0;
+  double error_rate = 0, inside_fraction = 0, splash_fraction = 0, time_to_form = 0, e_fwd_all = 0, error_spacings = 0;
 };
 
 /// Runs the scene into `options.out_dir`. Everything already written stays valid on any error.

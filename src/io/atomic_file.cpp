@@ -1,5 +1,10 @@
 #include "io/atomic_file.h"
 
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -55,6 +60,26 @@ Status ensure_writable_dir(const fs::path& dir) {
   if (::access(dir.c_str(), W_OK) != 0)
     return io_error(fmt::format("output folder {} is not writable: {}", dir.string(), std::strerror(errno)));
   return {};
+}
+
+std::size_t remove_stale_temp_files(const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) return 0;
+  std::vector<std::filesystem::path> stale;
+  for (auto it = std::filesystem::recursive_directory_iterator(dir, ec); !ec && it != std::filesystem::recursive_directory_iterator();
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const auto at = name.rfind(".tmp.");
+    if (at == std::string::npos || !it->is_regular_file(ec)) continue;
+    const std::string pid = name.substr(at + 5);
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    // kill(pid, 0) fails with ESRCH when no such process exists: the writer is gone for good.
+    const long id = std::strtol(pid.c_str(), nullptr, 10);
+    if (id > 0 && id != ::getpid() && ::kill(static_cast<pid_t>(id), 0) != 0 && errno == ESRCH) stale.push_back(it->path());
+  }
+  std::size_t removed = 0;
+  for (const auto& p : stale) removed += std::filesystem::remove(p, ec) ? 1 : 0;
+  return removed;
 }
 
 }  // namespace ff::io

@@ -32,7 +32,8 @@ Status Scene::validate() const {
     FF_CHECK(core::check_vec(p, "translate", targets[i].transform.translate, -1e9, 1e9));
     FF_CHECK(core::check_range(p, "start", targets[i].start, 0.0, 1e6));
   }
-  if (fluid.empty())
+  FF_CHECK(controller.validate());
+  if (fluid.empty() && targets.empty())
     return param_error("scene has no fluid: add a \"fluid\" list with at least one box or sphere source");
   return {};
 }
@@ -58,6 +59,10 @@ Status read_solver(const json& j, sim::SolverParams& s) {
   FF_CHECK(o.get("scorr_k", s.scorr_k));
   FF_CHECK(o.get("scorr_n", s.scorr_n));
   FF_CHECK(o.get("scorr_dq", s.scorr_dq));
+  FF_CHECK(o.get("surface_tension", s.surface_tension));
+  FF_CHECK(o.get("surface_tension_samples", s.surface_tension_samples));
+  FF_CHECK(o.get("drag", s.drag));
+  FF_CHECK(o.get("air_density", s.air_density));
   return o.finish();
 }
 
@@ -165,6 +170,42 @@ Status read_sampling(const json& j, sampling::SamplingParams& p) {
   return o.finish();
 }
 
+Status read_controller(const json& j, control::ControllerSpec& c) {
+  JsonObject o(j, "controller");
+  FF_CHECK(o.check_object());
+  FF_CHECK(o.get("name", c.name));
+  if (!control::find_controller(c.name))
+    return param_error(fmt::format("controller.name = \"{}\" is not one of: {}", c.name, control::controller_names()));
+  if (const json* a = o.child("adaptive")) {
+    JsonObject ao(*a, "controller.adaptive");
+    auto& p = c.adaptive;
+    FF_CHECK(ao.check_object());
+    FF_CHECK(ao.get("weights", p.weights));
+    FF_CHECK(ao.get("boundary_correction", p.boundary_correction));
+    FF_CHECK(ao.get("bond_breaking", p.bond_breaking));
+    std::string br;
+    FF_CHECK(ao.get("bond_radius", br));
+    if (!br.empty()) {
+      const auto b = control::parse_bond_radius(br);
+      if (!b) return param_error(fmt::format("controller.adaptive.bond_radius = \"{}\" is not one of: over-full, paper", br));
+      p.bond_radius = *b;
+    }
+    FF_CHECK(ao.get("gather", p.gather));
+    FF_CHECK(ao.get("kinematic", p.kinematic));
+    FF_CHECK(ao.get("max_speed", p.max_speed));
+    FF_CHECK(ao.get("alpha", p.alpha));
+    FF_CHECK(ao.get("epsilon", p.epsilon));
+    FF_CHECK(ao.get("clamp", p.clamp));
+    FF_CHECK(ao.get("gamma", p.gamma));
+    FF_CHECK(ao.get("normal_threshold", p.normal_threshold));
+    FF_CHECK(ao.get("gather_fill", p.gather_fill));
+    FF_CHECK(ao.get("gather_speed", p.gather_speed));
+    FF_CHECK(ao.get("gather_time", p.gather_time));
+    FF_CHECK(ao.finish());
+  }
+  return o.finish();
+}
+
 Status read_output(const json& j, OutputParams& p) {
   JsonObject o(j, "output");
   FF_CHECK(o.check_object());
@@ -193,12 +234,22 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   Scene s;
   JsonObject root(j, "");
   FF_CHECK(root.check_object());
-  if (const json* v = root.child("solver")) FF_CHECK(read_solver(*v, s.solver));
-  if (const json* v = root.child("domain")) FF_CHECK(read_domain(*v, s.domain));
+  if (const json* v = root.child("solver")) {
+    FF_CHECK(read_solver(*v, s.solver));
+    s.auto_radius = !(v->is_object() && v->contains("particle_radius"));
+  }
+  if (const json* v = root.child("domain")) {
+    FF_CHECK(read_domain(*v, s.domain));
+    s.auto_domain = false;
+  }
   if (const json* v = root.child("fluid")) FF_CHECK(read_fluid(*v, s.fluid));
   if (const json* v = root.child("targets")) FF_CHECK(read_targets(*v, base_dir, s.targets));
-  if (const json* v = root.child("output")) FF_CHECK(read_output(*v, s.output));
+  if (const json* v = root.child("output")) {
+    FF_CHECK(read_output(*v, s.output));
+    s.auto_frames = !(v->is_object() && v->contains("frames"));
+  }
   if (const json* v = root.child("sampling")) FF_CHECK(read_sampling(*v, s.sampling));
+  if (const json* v = root.child("controller")) FF_CHECK(read_controller(*v, s.controller));
   FF_CHECK(root.finish());
   FF_CHECK(s.validate());
   // The resume hash covers everything that shapes the simulation; the frame count may change between runs.

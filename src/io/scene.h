@@ -7,12 +7,17 @@
 //   "fluid":   [ {"shape": "box", "min": [..], "max": [..], "velocity": [..]},
 //                {"shape": "sphere", "center": [..], "radius": R, "velocity": [..]} ],
 //   "targets": [ {"mesh": PATH, "scale": S or [sx,sy,sz], "rotate": [deg x,y,z], "translate": [..], "start": T} ],
-//   "output":  { "fps": 60, "frames": 120, "checkpoint_every": 10, "velocity": true }
+//   "output":  { "fps": 60, "frames": 120, "checkpoint_every": 10, "velocity": true },
+//   "sampling": { SamplingParams fields },                    see sampling/sampling_params.h
+//   "controller": { "name": "adaptive", "adaptive": { AdaptiveParams fields } }   see control/
 // }
+// A scene with targets may leave out the particle radius, the domain and the fluid: the app then sizes
+// them from the targets (app/auto_scene.h), which is what the `auto_*` flags record.
 // Every key has a default; unknown keys are errors naming the JSON path and the closest valid key;
 // out-of-range values name the key, the value and the range. Mesh paths are relative to the scene file.
 #include "core/error.h"
 #include "io/load_mesh.h"
+#include "control/registry.h"
 #include "sampling/sampling_params.h"
 #include "sim/solver_params.h"
 
@@ -46,6 +51,10 @@ struct Scene {
   std::vector<TargetSpec> targets;
   OutputParams output;
   sampling::SamplingParams sampling;  ///< how targets become control particles (spacing 0 = the fluid spacing d)
+  control::ControllerSpec controller; ///< the shape controller ("adaptive" by default)
+  bool auto_radius = true;            ///< solver.particle_radius was not given: size it from the targets
+  bool auto_domain = true;            ///< domain was not given
+  bool auto_frames = true;            ///< output.frames was not given: with targets, run until formed (within a cap)
   std::uint64_t hash = 0;            ///< content hash of the simulation-relevant settings (for --resume)
 
   /// Cross-field checks (every struct's validate(), fluid present, sources in the domain).

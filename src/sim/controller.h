@@ -13,13 +13,15 @@ struct StepView {
   float dt = 0.0f;           ///< s, current sub-step
   double time = 0.0;         ///< s, start of this sub-step
   int iteration = -1;        ///< density-constraint iteration (correct_positions only)
+  int iterations = 0;        ///< N_it, the nominal iteration count (more may run while the density error is high)
   float particle_radius = 0.0f;  ///< r, m
   const core::NeighborList* fluid_neighbors = nullptr;  ///< built this sub-step on `position`
 };
 
 /// A shape-control method. Per sub-step the solver calls, in this order (METHOD.md §a.6):
 ///   begin_step → add_accelerations → [predict x*] → N × { correct_positions; PBF iteration; walls } → end_step
-/// Hooks may write only: acceleration, predicted, bound_control. They never resize the ParticleSet.
+/// Hooks may write only: acceleration, predicted, shift (the part of a correction that is not to become
+/// velocity), bound_control. They never resize the ParticleSet.
 class Controller {
  public:
   virtual ~Controller() = default;

@@ -23,6 +23,7 @@ void ParticleSet::resize(std::size_t n) {
   predicted.resize(n, Vec3f::Zero());
   density.resize(n, 0.0f);
   lambda.resize(n, 0.0f);
+  shift.resize(n, Vec3f::Zero());
 }
 
 bool ParticleSet::consistent() const {

@@ -24,6 +24,9 @@ struct ParticleSet {
   std::vector<Vec3f> predicted;       ///< x*, metres
   std::vector<float> density;         ///< ρ at the start of the last sub-step, kg/m³
   std::vector<float> lambda;          ///< PBF Lagrange multiplier of the last iteration, m²
+  /// Displacement a controller applied to x* this sub-step that must not become velocity (kinematic
+  /// control, see control/adaptive_params.h): v = (x* − x − shift)/Δt. Zeroed by the solver every sub-step.
+  std::vector<Vec3f> shift;
 
   std::size_t size() const { return position.size(); }
 
@@ -40,12 +43,12 @@ struct ParticleSet {
   template <class F>
   void for_each_array(F&& f) {
     for_each_state_array(f);
-    f(acceleration); f(predicted); f(density); f(lambda);
+    f(acceleration); f(predicted); f(density); f(lambda); f(shift);
   }
   template <class F>
   void for_each_array(F&& f) const {
     for_each_state_array(f);
-    f(acceleration); f(predicted); f(density); f(lambda);
+    f(acceleration); f(predicted); f(density); f(lambda); f(shift);
   }
 
   /// Appends a particle with the given position and velocity; its id is its current count.

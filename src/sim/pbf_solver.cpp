@@ -3,6 +3,7 @@
 #include "core/parallel.h"
 #include "core/timer.h"
 #include "core/pair_loop.h"
+#include "sim/drag.h"
 #include "sim/pbf_constraints.h"
 
 #include <Eigen/Geometry>  // cross product (vorticity)
@@ -52,7 +53,8 @@ PbfSolver::PbfSolver(const SolverParams& params, const Domain& domain)
 std::size_t PbfSolver::scratch_bytes() const {
   return neighbors_.bytes() + grid_.bytes() + next_.capacity() * sizeof(Vec3f) + omega_.capacity() * sizeof(Vec3f) +
          reorder_scratch_.v3.capacity() * sizeof(Vec3f) + reorder_scratch_.u32.capacity() * sizeof(Index) +
-         reorder_scratch_.u8.capacity() + reorder_scratch_.f32.capacity() * sizeof(float);
+         reorder_scratch_.u8.capacity() + reorder_scratch_.f32.capacity() * sizeof(float) + surface_tension_.bytes() +
+         surface_candidates_.capacity();
 }
 
 void PbfSolver::search(ParticleSet& p) {
@@ -63,25 +65,43 @@ void PbfSolver::search(ParticleSet& p) {
   grid_.neighbors(p.position, neighbors_);
 }
 
-void PbfSolver::densities(std::span<const Vec3f> x, std::vector<float>& rho) const {
+void PbfSolver::densities(std::span<const Vec3f> x, std::vector<float>& rho, std::uint8_t* candidates) const {
   using namespace core::simd;
   const float w0 = poly6_.w_zero(), m = mass_, k = poly6_.k;
   const Vec3f* xs = x.data();
   const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
-  parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<Index>(ii);
-    const Vec3f xi = xs[i];
-    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
-    __m128 sw = zero;
-    for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
-      const V3 xj = gather(xs, j[0], j[1], j[2], j[3]);
-      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
-      const __m128 q2 = _mm_sub_ps(h2, r2);
-      sw = _mm_add_ps(sw, select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)), _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+  SurfaceTensionParams st;
+  st.support = params_.support();
+  // kClassify: also sum the neighbour offsets for the surface-tension classifier (METHOD.md §c.6).
+  auto pass = [&](auto kClassify) {
+    constexpr bool kC = decltype(kClassify)::value;
+    parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
+      const auto i = static_cast<Index>(ii);
+      const Vec3f xi = xs[i];
+      const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+      __m128 sw = zero, ox = zero, oy = zero, oz = zero;
+      const core::NeighborRange nb = neighbors_.of(i);
+      for_neighbors4(nb, i, [&](const Index* j, __m128 lanes) {
+        const V3 xj = gather(xs, j[0], j[1], j[2], j[3]);
+        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+        const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+        const __m128 q2 = _mm_sub_ps(h2, r2);
+        sw = _mm_add_ps(sw, select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)), _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+        if constexpr (kC) {
+          ox = _mm_add_ps(ox, select(lanes, rx));
+          oy = _mm_add_ps(oy, select(lanes, ry));
+          oz = _mm_add_ps(oz, select(lanes, rz));
+        }
+      });
+      rho[i] = m * (w0 + k * hsum(sw));
+      if constexpr (kC)
+        candidates[i] = surface_candidate(nb.size(), Vec3f(hsum(ox), hsum(oy), hsum(oz)).norm(), st) ? 1 : 0;
     });
-    rho[i] = m * (w0 + k * hsum(sw));
-  });
+  };
+  if (candidates)
+    pass(std::true_type{});
+  else
+    pass(std::false_type{});
 }
 
 void PbfSolver::compute_densities(ParticleSet& p) {
@@ -92,7 +112,41 @@ void PbfSolver::compute_densities(ParticleSet& p) {
 
 // a_ext = g + XSPH viscosity in the seed's acceleration form (eq. 12, sign fixed as METHOD.md §a.4):
 //   a_vis,i = (η/Δt) Σ_j (m/ρ_j)(v_j − v_i) W(x_i − x_j, H_p)
-void PbfSolver::external_accelerations(ParticleSet& p, float dt) const {
+// then surface tension (eq. 13) and drag (eq. 14), each skipped when its coefficient is 0.
+void PbfSolver::external_accelerations(ParticleSet& p, float dt, double time) {
+  DragParams dp;
+  dp.scale = params_.drag;
+  dp.air_density = params_.air_density;
+  dp.liquid_density = params_.rest_density;
+  dp.spacing = params_.spacing();
+  dp.mass = mass_;
+  const bool drag = params_.drag > 0.0f;
+  // The drag's pass over the neighbours (occlusion) rides on the XSPH pass when there is one.
+  const bool fused = drag && params_.viscosity > 0.0f;
+  if (fused) {
+    const DragModel model(dp);
+    xsph_accelerations(p, dt, &model);
+  } else {
+    xsph_accelerations(p, dt, nullptr);
+  }
+  if (params_.surface_tension > 0.0f) {
+    SurfaceTensionParams st;
+    // σ is given at the reference spacing d_ref = 0.05 m (SPlisHSPlasH's default radius, where the paper's
+    // σ = 0.05 comes from) and scaled by (d/d_ref)², so the surface acceleration σκ/m ∝ 1/d keeps its size
+    // relative to gravity at any resolution; the literal σ at d = 0.02 m pulls ~16× harder and jitters.
+    const float dr = params_.spacing() / 0.05f;
+    st.sigma = params_.surface_tension * dr * dr;
+    st.samples_per_second = params_.surface_tension_samples;
+    st.support = params_.support();
+    st.mass = mass_;
+    surface_tension_.add_accelerations(p.position, p.id, neighbors_, surface_candidates_, st, dt,
+                                       surface_tension_step_key(time), p.acceleration);
+  }
+  if (drag && !fused) add_drag(p.position, p.velocity, neighbors_, dp, p.acceleration);
+}
+
+// g + XSPH, and with `drag` also the drag acceleration (its occlusion term from the same pair loop).
+void PbfSolver::xsph_accelerations(ParticleSet& p, float dt, const DragModel* drag) const {
   const Vec3f g = params_.gravity;
   const float c = params_.viscosity / dt, m = mass_;
   const Vec3f* x = p.position.data();
@@ -105,27 +159,40 @@ void PbfSolver::external_accelerations(ParticleSet& p, float dt) const {
   }
   using namespace core::simd;
   const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps(), mk = broadcast(m * poly6_.k);
-  parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<Index>(ii);
-    const Vec3f xi = x[i], vi = v[i];
-    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
-    const __m128 ux = broadcast(vi.x()), uy = broadcast(vi.y()), uz = broadcast(vi.z());
-    __m128 sx = zero, sy = zero, sz = zero;
-    for_neighbors4(neighbors_.of(i), i, [&](const Index* j, __m128 lanes) {
-      const V3 xj = gather(x, j[0], j[1], j[2], j[3]);
-      const V3 vj = gather(v, j[0], j[1], j[2], j[3]);
-      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
-      const __m128 q2 = _mm_sub_ps(h2, r2);
-      // (m/ρ_j) W_ij
-      const __m128 wv = select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)),
-                               _mm_div_ps(_mm_mul_ps(mk, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)), gather(rho, j[0], j[1], j[2], j[3])));
-      sx = _mm_add_ps(sx, _mm_mul_ps(wv, _mm_sub_ps(vj.x, ux)));
-      sy = _mm_add_ps(sy, _mm_mul_ps(wv, _mm_sub_ps(vj.y, uy)));
-      sz = _mm_add_ps(sz, _mm_mul_ps(wv, _mm_sub_ps(vj.z, uz)));
+  auto pass = [&](auto kDrag) {
+    constexpr bool kD = decltype(kDrag)::value;
+    parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t ii) {
+      const auto i = static_cast<Index>(ii);
+      const Vec3f xi = x[i], vi = v[i];
+      const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+      const __m128 ux = broadcast(vi.x()), uy = broadcast(vi.y()), uz = broadcast(vi.z());
+      __m128 sx = zero, sy = zero, sz = zero, best = zero;
+      Vec3f dir = Vec3f::Zero();
+      if constexpr (kD) dir = DragModel::direction(vi);
+      const __m128 dx = broadcast(dir.x()), dy = broadcast(dir.y()), dz = broadcast(dir.z());
+      const core::NeighborRange nb = neighbors_.of(i);
+      for_neighbors4(nb, i, [&](const Index* j, __m128 lanes) {
+        const V3 xj = gather(x, j[0], j[1], j[2], j[3]);
+        const V3 vj = gather(v, j[0], j[1], j[2], j[3]);
+        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+        const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+        const __m128 q2 = _mm_sub_ps(h2, r2);
+        // (m/ρ_j) W_ij
+        const __m128 wv = select(_mm_and_ps(lanes, _mm_cmplt_ps(r2, h2)),
+                                 _mm_div_ps(_mm_mul_ps(mk, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)), gather(rho, j[0], j[1], j[2], j[3])));
+        sx = _mm_add_ps(sx, _mm_mul_ps(wv, _mm_sub_ps(vj.x, ux)));
+        sy = _mm_add_ps(sy, _mm_mul_ps(wv, _mm_sub_ps(vj.y, uy)));
+        sz = _mm_add_ps(sz, _mm_mul_ps(wv, _mm_sub_ps(vj.z, uz)));
+        if constexpr (kD) best = DragModel::occlusion(best, dx, dy, dz, rx, ry, rz, r2, lanes);
+      });
+      a[i] = g + c * Vec3f(hsum(sx), hsum(sy), hsum(sz));
+      if constexpr (kD) a[i] += drag->acceleration(vi, nb.size(), best);
     });
-    a[i] = g + c * Vec3f(hsum(sx), hsum(sy), hsum(sz));
-  });
+  };
+  if (drag)
+    pass(std::true_type{});
+  else
+    pass(std::false_type{});
 }
 
 void PbfSolver::clamp_to_walls(std::vector<Vec3f>& x) const {
@@ -255,7 +322,7 @@ void PbfSolver::vorticity_confinement(ParticleSet& p, float dt) {
 
 void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& controller, StageTimes& times) {
   const std::size_t n = p.size();
-  StepView view{dt, time, -1, params_.particle_radius, &neighbors_};
+  StepView view{dt, time, -1, params_.iterations, params_.particle_radius, &neighbors_};
   {
     core::ScopedTimer t(times.neighbors);
     p.resize(n);
@@ -264,8 +331,13 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
   }
   {
     core::ScopedTimer t(times.forces);
-    densities(p.position, p.density);
-    external_accelerations(p, dt);
+    if (params_.surface_tension > 0.0f) {
+      surface_candidates_.resize(n);
+      densities(p.position, p.density, surface_candidates_.data());
+    } else {
+      densities(p.position, p.density);
+    }
+    external_accelerations(p, dt, time);
   }
   {
     core::ScopedTimer t(times.control);
@@ -279,9 +351,11 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
     const Vec3f* x = p.position.data();
     const Vec3f* a = p.acceleration.data();
     const Vec3f lo = wall_lo_, hi = wall_hi_;
+    Vec3f* shift = p.shift.data();
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) {
       const Vec3f vs = v[i] + dt * a[i];
       xs[i] = (x[i] + dt * vs).cwiseMax(lo).cwiseMin(hi);
+      shift[i] = Vec3f::Zero();
     });
   }
   // At least `iterations` Jacobi sweeps; more (up to max_iterations) while the mean compression, measured
@@ -311,7 +385,8 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
     Vec3f* v = p.velocity.data();
     const Vec3f* xs = p.predicted.data();
     const Vec3f* x = p.position.data();
-    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) { v[i] = (xs[i] - x[i]) * inv_dt; });
+    const Vec3f* shift = p.shift.data();
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) { v[i] = (xs[i] - x[i] - shift[i]) * inv_dt; });
     if (params_.vorticity > 0.0f) vorticity_confinement(p, dt);
     p.position.swap(p.predicted);
   }

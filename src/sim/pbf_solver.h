@@ -10,7 +10,8 @@
 //
 // One sub-step Δt:
 //   1. neighbour search on x (particles are re-sorted by grid cell for locality; ids keep identity)
-//   2. ρ(x); a_ext = g + XSPH(η/Δt) [+ controller.add_accelerations]
+//   2. ρ(x) (and the surface classification); a_ext = g + XSPH(η/Δt) + surface tension (Zorilla) + drag (Gissler)
+//      [+ controller.add_accelerations]
 //   3. v* = v + Δt a_ext; x* = x + Δt v*; walls
 //   4. N_it × { controller.correct_positions; λ_i; Δx_i with s_corr; x* += Δx; walls }, N_it ≥ iterations,
 //      continuing up to max_iterations while the mean compression exceeds max_density_error
@@ -24,8 +25,10 @@
 #include "core/kernels.h"
 #include "core/neighbor_grid.h"
 #include "sim/controller.h"
+#include "sim/drag.h"
 #include "sim/particle_set.h"
 #include "sim/solver_params.h"
+#include "sim/surface_tension.h"
 
 namespace ff::sim {
 
@@ -73,8 +76,10 @@ class PbfSolver {
 
  private:
   void search(ParticleSet& p);
-  void densities(std::span<const Vec3f> x, std::vector<float>& rho) const;
-  void external_accelerations(ParticleSet& p, float dt) const;
+  /// ρ at x; with `candidates`, also the surface-tension classification (one flag per particle).
+  void densities(std::span<const Vec3f> x, std::vector<float>& rho, std::uint8_t* candidates = nullptr) const;
+  void external_accelerations(ParticleSet& p, float dt, double time);
+  void xsph_accelerations(ParticleSet& p, float dt, const DragModel* drag) const;
   void solve_iteration(ParticleSet& p);
   void clamp_to_walls(std::vector<Vec3f>& x) const;
   void vorticity_confinement(ParticleSet& p, float dt);
@@ -90,6 +95,8 @@ class PbfSolver {
   ReorderScratch reorder_scratch_;
   std::vector<Vec3f> next_;        // x* after the current iteration (Jacobi double buffer)
   std::vector<Vec3f> omega_;       // vorticity (only when enabled)
+  SurfaceTension surface_tension_; // per-particle normals and curvatures (only when σ > 0)
+  std::vector<std::uint8_t> surface_candidates_;  // classifier output of the density pass (only when σ > 0)
 };
 
 }  // namespace ff::sim

@@ -1,0 +1,124 @@
+#include "app/auto_scene.h"
+
+#include "io/load_mesh.h"
+#include "sampling/mesh_field.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace ff::app {
+
+Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene) {
+  std::vector<TargetGeometry> out;
+  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
+    io::MeshLoadStats st;
+    auto mesh = io::load_mesh(scene.targets[i].mesh, io::LoadOptions{scene.targets[i].transform}, &st);
+    if (!mesh) return Error{mesh.error().kind, fmt::format("targets[{}]: {}", i, mesh.error().message)};
+    auto field = sampling::MeshField::build(*mesh);
+    if (!field) return Error{field.error().kind, fmt::format("targets[{}]: {}", i, field.error().message)};
+    spdlog::info("target {}: {} ({} vertices, {} triangles, {} degenerate dropped)", i,
+                 scene.targets[i].mesh.filename().string(), mesh->vertices.size(), mesh->triangles.size(),
+                 st.dropped_degenerate);
+    TargetGeometry g;
+    g.volume = field->encloses_volume() ? field->volume() : 0.0;
+    g.area = field->area();
+    g.box = field->bounds();
+    g.mesh = std::move(*mesh);
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
+Status complete_scene(io::Scene& s, const std::vector<TargetGeometry>& targets) {
+  if (targets.empty()) return {};
+  double volume = 0.0, area = 0.0;
+  for (const auto& t : targets) volume += t.volume, area += t.area;
+  if (s.auto_radius) {
+    // d³ per sample (the blue-noise count is V/d³); an open sheet is sampled by its area instead.
+    const double n = static_cast<double>(s.sampling.auto_count);
+    const double d = volume > 0.0 ? std::cbrt(volume / n) : std::sqrt(area / n);
+    if (!(d > 0.0) || !std::isfinite(d)) return input_error("the targets have no volume and no area to size the particles by");
+    s.solver.particle_radius = static_cast<float>(0.5 * d);
+    FF_CHECK(s.solver.validate());
+  }
+  const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
+  if (s.fluid.empty()) {
+    if (!(volume > 0.0))
+      return input_error("the targets enclose no volume, so the fluid cannot be sized from them: add a \"fluid\" list");
+    for (const auto& t : targets) {
+      if (!(t.volume > 0.0)) continue;
+      // A column over the middle of the target's footprint holding the target's volume, a spacing above it.
+      const Vec3f ext = t.box.max - t.box.min, mid = 0.5f * (t.box.min + t.box.max);
+      float fx = std::max(0.7f * ext.x(), 4.0f * d), fz = std::max(0.7f * ext.z(), 4.0f * d);
+      float h = static_cast<float>(t.volume / (double(fx) * fz));
+      // A very thin target would make a needle: widen the column to at most its own height.
+      if (h > 2.0f * std::max(fx, fz)) {
+        const float a = std::cbrt(static_cast<float>(t.volume) / 2.0f);
+        fx = fz = a;
+        h = 2.0f * a;
+      }
+      sim::FluidSource src;
+      src.shape = sim::FluidSource::Shape::Box;
+      src.min = Vec3f(mid.x() - 0.5f * fx, t.box.max.y() + d, mid.z() - 0.5f * fz);
+      src.max = Vec3f(mid.x() + 0.5f * fx, t.box.max.y() + d + h, mid.z() + 0.5f * fz);
+      s.fluid.push_back(src);
+    }
+  }
+  if (s.auto_domain) {
+    Aabb box;
+    for (const auto& t : targets) box.extend(t.box.min), box.extend(t.box.max);
+    for (const auto& f : s.fluid) {
+      if (f.shape == sim::FluidSource::Shape::Box) {
+        box.extend(f.min), box.extend(f.max);
+      } else {
+        box.extend(f.center - Vec3f::Constant(f.radius)), box.extend(f.center + Vec3f::Constant(f.radius));
+      }
+    }
+    const float margin = 2.0f * hc;
+    s.domain.min = box.min - Vec3f(margin, 0.0f, margin);
+    s.domain.min.y() = std::min(box.min.y() - hc, box.min.y());
+    for (const auto& t : targets) s.domain.min.y() = std::min(s.domain.min.y(), t.box.min.y() - hc);
+    s.domain.max = box.max + Vec3f(margin, margin, margin);
+  }
+  return s.validate();
+}
+
+void assign_targets(sim::ParticleSet& p, const std::vector<TargetGeometry>& targets) {
+  const std::size_t n = p.size();
+  std::fill(p.target.begin(), p.target.end(), sim::kFreeFluid);
+  if (targets.empty() || n == 0) return;
+  if (targets.size() == 1) {
+    std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+    return;
+  }
+  double total = 0.0;
+  for (const auto& t : targets) total += std::max(t.volume, 1e-30);
+  std::vector<std::size_t> order(targets.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return targets[a].volume > targets[b].volume; });
+  std::vector<Index> free_idx(n);
+  std::iota(free_idx.begin(), free_idx.end(), Index{0});
+  std::size_t given = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t t = order[k];
+    const std::size_t want =
+        k + 1 == order.size() ? n - given
+                              : std::min(n - given, static_cast<std::size_t>(std::llround(double(n) * std::max(targets[t].volume, 1e-30) / total)));
+    const Vec3f c = 0.5f * (targets[t].box.min + targets[t].box.max);
+    // Nearest `want` of the free particles (ties by id, so the split is deterministic).
+    auto closer = [&](Index a, Index b) {
+      const float da = (p.position[a] - c).squaredNorm(), db = (p.position[b] - c).squaredNorm();
+      return da < db || (da == db && p.id[a] < p.id[b]);
+    };
+    std::nth_element(free_idx.begin(), free_idx.begin() + static_cast<std::ptrdiff_t>(want), free_idx.end(), closer);
+    for (std::size_t q = 0; q < want; ++q) p.target[free_idx[q]] = static_cast<std::uint8_t>(t);
+    free_idx.erase(free_idx.begin(), free_idx.begin() + static_cast<std::ptrdiff_t>(want));
+    given += want;
+  }
+}
+
+}  // namespace ff::app

@@ -1,0 +1,38 @@
+#pragma once
+// Completes a scene that names only its targets (DESIGN.md: the smallest scene is {"targets":[{"mesh":...}]}):
+//   particle spacing  d = ∛(V / auto_count): the targets hold ~auto_count (10k) control samples and the fluid
+//                     as many particles (METHOD §0: d_c = d);
+//   fluid             one column per target, of the target's volume, standing on top of the target so it
+//                     pours down through the target's control band (METHOD §a.10: control only reaches H_c);
+//   domain            the targets and columns with a margin; the floor one control support below the lowest
+//                     target, so the formed shape is held by the control, not by the floor.
+// Mesh units are metres whatever the model's size. Given keys are never overridden.
+#include "core/error.h"
+#include "io/scene.h"
+#include "io/triangle_mesh.h"
+#include "sim/particle_set.h"
+
+#include <vector>
+
+namespace ff::app {
+
+/// A target mesh in its scene pose, with what the layout needs.
+struct TargetGeometry {
+  io::TriangleMesh mesh;
+  double volume = 0.0;  ///< m³ (0 for an open sheet)
+  double area = 0.0;    ///< m²
+  Aabb box;
+};
+
+/// Loads every target with its transform. Errors name the target.
+Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene);
+
+/// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets.
+Status complete_scene(io::Scene& scene, const std::vector<TargetGeometry>& targets);
+
+/// Shares the fluid out among the targets by volume (METHOD: "fluid is shared out by volume"): target t gets
+/// round(N V_t / ΣV) particles, the ones nearest its centre among those not yet taken, larger targets first.
+/// One target: every particle. No targets: all stay free (kFreeFluid).
+void assign_targets(sim::ParticleSet& particles, const std::vector<TargetGeometry>& targets);
+
+}  // namespace ff::app

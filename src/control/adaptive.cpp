@@ -1,0 +1,335 @@
+#include "control/adaptive.h"
+
+#include "core/parallel.h"
+#include "sampling/weights.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ff::control {
+using core::parallel_for;
+
+AdaptiveController::AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc)
+    : ctx_(ctx), params_(params), hc_(hc), d_(ctx.spacing()), poly6_(hc), spiky_(hc), ctrl_grid_(hc), fluid_grid_(hc) {}
+
+Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vector<ControlTarget> targets,
+                                                                        const ControlContext& ctx,
+                                                                        const AdaptiveParams& params) {
+  FF_CHECK(params.validate());
+  if (targets.empty()) return param_error("controller adaptive: the scene has no targets");
+  if (targets.size() > 250) return param_error(fmt::format("controller adaptive: {} targets, at most 250", targets.size()));
+  float hc = 0.0f;
+  for (const auto& t : targets) {
+    if (!t.set.consistent() || t.set.size() == 0 || !(t.set.support > 0.0f) || !(t.set.mass > 0.0f))
+      return param_error(fmt::format("controller adaptive: target {} has no weighted control samples", t.set.target));
+    if (hc > 0.0f && std::abs(t.set.support - hc) > 1e-4f * hc)
+      return param_error(fmt::format("controller adaptive: targets have different control supports ({} m and {} m); "
+                                     "sample them at one spacing", hc, t.set.support));
+    hc = std::max(hc, t.set.support);
+  }
+  std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, hc));
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    const auto& s = targets[t].set;
+    c->mass_c_.push_back(s.mass);
+    c->start_.push_back(targets[t].start);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      c->xc_.push_back(s.position[i]);
+      c->rho_c_.push_back(s.density[i]);
+      c->phi_.push_back(params.weights ? s.phi[i] : 1.0f);
+      c->tc_.push_back(static_cast<std::uint8_t>(t));
+    }
+  }
+  const float d = ctx.spacing(), mp = ctx.particle_mass;
+  // ε_c = epsilon · S_0, S_0 = Σ_j |g_j|² over a full resting lattice neighbourhood, g_j = (m_p/ρ_ref) ∇W(k d, H_c)
+  // with ρ_ref the lattice's kernel-sum density at H_c: what a filled interior sample sees (METHOD §a.3).
+  const double rho_ref = sampling::lattice_density(d, hc, ctx.rest_density);
+  const int reach = static_cast<int>(std::ceil(hc / d));
+  double s0 = 0.0;
+  for (int k = -reach; k <= reach; ++k)
+    for (int j = -reach; j <= reach; ++j)
+      for (int i = -reach; i <= reach; ++i) {
+        if (!(i || j || k)) continue;
+        s0 += ((mp / rho_ref) * c->spiky_.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
+      }
+  c->eps_c_ = static_cast<float>(params.epsilon * s0);
+  // g_ref: the largest control-density gradient, which is found at the target surface (eq. 15 threshold).
+  c->ctrl_grid_.build(c->xc_);
+  core::NeighborList self;
+  c->ctrl_grid_.query(c->xc_, c->xc_, hc, self);
+  const auto m = static_cast<std::int64_t>(c->xc_.size());
+  c->grad_c_.resize(c->xc_.size());
+  c->g_ref_ = static_cast<float>(core::deterministic_max(m, 0.0, [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    Vec3f g = Vec3f::Zero();
+    for (Index j : self.of(i))
+      if (c->tc_[j] == c->tc_[i]) g += c->mass_c_[c->tc_[i]] * c->spiky_.grad(c->xc_[i] - c->xc_[j]);
+    c->grad_c_[i] = -g;  // n at the sample: minus the control-density gradient, pointing out of the target
+    return static_cast<double>(g.norm());
+  }));
+  // The gather field covers the domain at the control support (coarser on a huge domain).
+  c->seed_field_.resize(targets.size());
+  for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, hc);
+  c->fill_.assign(c->xc_.size(), 0.0f);
+  return c;
+}
+
+std::size_t AdaptiveController::scratch_bytes() const {
+  auto vb = [](const auto& v) { return v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
+  return cf_.bytes() + fc_.bytes() + fluid_grid_.bytes() + ctrl_grid_.bytes() + vb(xc_) + vb(rho_c_) + vb(phi_) + vb(tc_) +
+         vb(rho_p_) + vb(fill_) + vb(hstar2_) + vb(lambda_) + vb(bond_off_) + vb(bond_idx_) + vb(seeds_);
+}
+
+void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
+  time_ = view.time;
+  const std::size_t n = p.size(), m = xc_.size();
+  const Vec3f* x = p.position.data();
+  const std::uint8_t* tf = p.target.data();
+  // Pairs within H_c in both directions, on the positions at the start of the sub-step.
+  fluid_grid_.build(p.position);
+  fluid_grid_.query(p.position, xc_, hc_, cf_);
+  ctrl_grid_.query(xc_, p.position, hc_, fc_);
+  rho_p_.resize(m);
+  fill_.resize(m);
+  hstar2_.resize(m);
+  lambda_.assign(m, 0.0f);
+
+  // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
+  const float mp = ctx_.particle_mass, hc2 = hc_ * hc_;
+  parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    float rho = 0.0f;
+    if (active(tc_[i], time_)) {
+      const Vec3f xi = xc_[i];
+      const std::uint8_t t = tc_[i];
+      for (Index j : cf_.of(i))
+        if (tf[j] == t) rho += poly6_.w_r2((xi - x[j]).squaredNorm());
+    }
+    rho_p_[i] = mp * rho;
+    const float f = rho_p_[i] / rho_c_[i];
+    fill_[i] = f;
+    float scale = 1.0f;
+    if (params_.bond_breaking) {
+      scale = params_.bond_radius == BondRadius::Paper ? 1.0f / (1.0f + f) : std::min(1.0f, 2.0f / (1.0f + f));
+    }
+    hstar2_[i] = hc2 * scale * scale;
+  });
+
+  // Bonds B(j), CSR: count, prefix, fill. A fluid particle is controlled iff it has a bond (METHOD §a.5).
+  bond_off_.assign(n + 1, 0);
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    Index c = 0;
+    const std::uint8_t t = tf[j];
+    if (active(t, time_))
+      for (Index i : fc_.of(j))
+        if (tc_[i] == t && (xc_[i] - x[j]).squaredNorm() <= hstar2_[i]) ++c;
+    bond_off_[j + 1] = c;
+  });
+  for (std::size_t j = 0; j < n; ++j) bond_off_[j + 1] += bond_off_[j];
+  bond_idx_.resize(bond_off_[n]);
+  Index* bound = p.bound_control.data();
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    Index o = bond_off_[j], nearest = kInvalidIndex;
+    if (o == bond_off_[j + 1]) {
+      bound[j] = kInvalidIndex;
+      return;
+    }
+    const std::uint8_t t = tf[j];
+    float best = INFINITY;
+    for (Index i : fc_.of(j)) {
+      if (tc_[i] != t) continue;
+      const float r2 = (xc_[i] - x[j]).squaredNorm();
+      if (r2 <= hstar2_[i]) {
+        bond_idx_[o++] = i;
+        if (r2 < best) best = r2, nearest = i;
+      }
+    }
+    bound[j] = nearest;
+  });
+}
+
+void AdaptiveController::add_accelerations(const sim::StepView& view, sim::ParticleSet& p) {
+  const std::size_t n = p.size();
+  Vec3f* a = p.acceleration.data();
+  // Boundary correction (eq. 15–16): at a controlled particle, n = −Σ_i m_c ∇W(x_p − x_ci) points out of the
+  // target; where it is strong (the surface band) the outward part of a_ext is removed, so gravity cannot
+  // drag controlled fluid out through the lower surface.
+  // n is taken at the particle's nearest bonded sample (precomputed: the control samples are static), not
+  // summed over the ~270 samples around the particle: the two differ by less than a spacing in position, and
+  // the sum cost as much as the whole control correction.
+  if (params_.boundary_correction) {
+    const float thr = params_.normal_threshold * g_ref_;
+    const Index* bound = p.bound_control.data();
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+      const auto j = static_cast<std::size_t>(jj);
+      const Index i = bound[j];
+      if (i == kInvalidIndex) return;
+      const Vec3f nrm = grad_c_[i];
+      const float len = nrm.norm();
+      if (!(len >= thr) || len == 0.0f) return;
+      const Vec3f nh = nrm / len;
+      const float out = nh.dot(a[j]);
+      if (out > 0.0f) a[j] -= out * nh;
+    });
+  }
+  // Speed limit of controlled fluid: v* = v + Δt a is brought back to max_speed through the acceleration.
+  {
+    const float vmax = params_.max_speed * d_, dt = view.dt;
+    const Vec3f* v = p.velocity.data();
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+      const auto j = static_cast<std::size_t>(jj);
+      if (bond_off_[j] == bond_off_[j + 1]) return;
+      const Vec3f vs = v[j] + dt * a[j];
+      const float s2 = vs.squaredNorm();
+      if (s2 > vmax * vmax) a[j] += (vs * (vmax / std::sqrt(s2)) - vs) / dt;
+    });
+  }
+  if (params_.gather) gather(view, p);
+}
+
+// Gather (ours, METHOD §a.10): an unbonded particle whose target still has under-filled samples is steered
+// toward the nearest of them, at a limited speed, with gravity cancelled so it can rise into a target
+// above it. It stops as soon as the particle is bonded (the control takes over) or the target is full.
+void AdaptiveController::gather(const sim::StepView& view, sim::ParticleSet& p) {
+  const std::size_t n = p.size(), m = xc_.size();
+  // Which targets have unbonded fluid at all (once formed, none: the field is not worth computing).
+  std::vector<char> wanted(seed_field_.size(), 0);
+  for (std::size_t j = 0; j < n; ++j)
+    if (p.target[j] < wanted.size() && bond_off_[j] == bond_off_[j + 1]) wanted[p.target[j]] = 1;
+  for (std::size_t t = 0; t < seed_field_.size(); ++t) {
+    seeds_.clear();
+    if (wanted[t] && active(static_cast<std::uint8_t>(t), time_))
+      for (std::size_t i = 0; i < m; ++i)
+        if (tc_[i] == t && fill_[i] < params_.gather_fill) seeds_.push_back(static_cast<Index>(i));
+    seed_field_[t].compute(xc_, seeds_);
+  }
+  const float speed = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
+  const Vec3f g = ctx_.gravity;
+  const Vec3f* x = p.position.data();
+  const Vec3f* v = p.velocity.data();
+  Vec3f* a = p.acceleration.data();
+  const std::uint8_t* tf = p.target.data();
+  (void)view;
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    const std::uint8_t t = tf[j];
+    if (t >= seed_field_.size() || bond_off_[j] != bond_off_[j + 1]) return;
+    const Index s = seed_field_[t].nearest(x[j]);
+    if (s == kInvalidIndex) return;
+    const Vec3f to = xc_[s] - x[j];
+    const float len = to.norm();
+    if (len <= 0.0f) return;
+    const Vec3f v_des = (speed / len) * to;
+    a[j] += -g + inv_tau * (v_des - v[j]);
+  });
+}
+
+// Eq. 17–18 as METHOD §a.5: a soft spring toward the bonded samples, stiffness f_i(r) = 1/(1 + (ρ_p/ρ_c) r/H_c),
+// kernel-averaged so symmetric surroundings pull ~nothing. Once per sub-step.
+void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
+  const std::size_t n = p.size();
+  Vec3f* xs = p.predicted.data();
+  const float gamma = params_.gamma * std::min(1.0f, dt / kReferenceDt), inv_hc = 1.0f / hc_;
+  Vec3f* shift = p.shift.data();
+  const bool kinematic = params_.kinematic;
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    const Index b = bond_off_[j], e = bond_off_[j + 1];
+    if (b == e) return;
+    const Vec3f xj = xs[j];
+    Vec3f num = Vec3f::Zero();
+    float den = 0.0f;
+    for (Index k = b; k < e; ++k) {
+      const Index i = bond_idx_[k];
+      const Vec3f r = xc_[i] - xj;
+      const float r2 = r.squaredNorm();
+      const float w = poly6_.w_r2(r2);
+      if (w <= 0.0f) continue;
+      const float f = 1.0f / (1.0f + fill_[i] * std::sqrt(r2) * inv_hc);
+      num += (w * f) * r;
+      den += w;
+    }
+    if (den > 0.0f) {
+      const Vec3f dx = (gamma / den) * num;
+      xs[j] = xj + dx;
+      if (kinematic) shift[j] += dx;
+    }
+  });
+}
+
+// Eq. 6–10 (METHOD §a.3): per sample λ_i = −C_i/(Σ_j |g_ij|² + ε_c) with C_i = min(ρ_p,i/ρ_c,i − 1, 0) at x*,
+// g_ij = −(m_p/ρ_c,i) ∇W(x_ci − x*_j); per fluid particle Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij, at most clamp·d.
+void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
+  const std::size_t n = p.size(), m = xc_.size();
+  Vec3f* xs = p.predicted.data();
+  const std::uint8_t* tf = p.target.data();
+  const float mp = ctx_.particle_mass, eps = eps_c_;
+  parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    lambda_[i] = 0.0f;
+    const std::uint8_t t = tc_[i];
+    if (!active(t, time_)) return;
+    const Vec3f xi = xc_[i];
+    // Density first; the gradient sum (a square root per pair) only for the samples that are under-filled.
+    float sw = 0.0f;
+    const auto range = cf_.of(i);
+    for (Index j : range)
+      if (tf[j] == t) sw += poly6_.w_r2((xi - xs[j]).squaredNorm());
+    const float c = mp * sw / rho_c_[i] - 1.0f;
+    if (c >= 0.0f) return;
+    float g2 = 0.0f;
+    for (Index j : range) {
+      if (tf[j] != t) continue;
+      const float r2 = (xi - xs[j]).squaredNorm();
+      if (r2 >= spiky_.h2) continue;
+      const float q = spiky_.h - std::sqrt(r2);
+      g2 += q * q * q * q;  // |∇W|² = kgrad² (h − r)⁴
+    }
+    const float k = mp / rho_c_[i] * spiky_.kgrad;
+    lambda_[i] = -c / (k * k * g2 + eps);
+  });
+  if (core::deterministic_max(static_cast<std::int64_t>(m), 0.0, [&](std::int64_t i) {
+        return static_cast<double>(lambda_[static_cast<std::size_t>(i)]);
+      }) == 0.0)
+    return;  // every sample is full: no correction anywhere
+  const float alpha = params_.alpha, max_dx = params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt),
+              max_dx2 = max_dx * max_dx;
+  Vec3f* shift = p.shift.data();
+  const bool kinematic = params_.kinematic;
+  const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    const Index b = bond_off_[j], e = bond_off_[j + 1];
+    if (b == e) return;
+    const Vec3f xj = xs[j];
+    Vec3f dx = Vec3f::Zero();
+    for (Index k = b; k < e; ++k) {
+      const Index i = bond_idx_[k];
+      const float l = lambda_[i];
+      if (l == 0.0f) continue;
+      const Vec3f r = xc_[i] - xj;
+      const float r2 = r.squaredNorm();
+      if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
+      const float len = std::sqrt(r2);
+      const float q = spiky_.h - len;
+      dx += (phi_[i] * l * mp / rho_c_[i] * kg * q * q / len) * r;
+    }
+    dx *= alpha;
+    const float d2 = dx.squaredNorm();
+    if (d2 > max_dx2) dx *= max_dx / std::sqrt(d2);
+    xs[j] = xj + dx;
+    if (kinematic) shift[j] += dx;
+  });
+}
+
+// The control acts in the nominal N_it iterations only: the solver's extra iterations (while the density error is
+// high) are there to make the fluid incompressible, and more control sweeps would make the inflow depend on them.
+void AdaptiveController::correct_positions(const sim::StepView& view, sim::ParticleSet& p) {
+  if (view.iteration == 0 && params_.bond_breaking && params_.gamma > 0.0f) adaptive_spring(p, view.dt);
+  if (view.iteration < std::max(1, view.iterations)) control_correction(p, view.dt);
+}
+
+}  // namespace ff::control

@@ -1,0 +1,90 @@
+#pragma once
+// `adaptive`: the paper's controller (Zhou et al., §4, Algorithms 1–2), as specified in METHOD.md §a.2–§a.6.
+//
+// Per sub-step (the solver's hook order, METHOD §a.6):
+//   begin_step        control–fluid pairs within H_c (both directions); ρ_p,i at x; bond radius H_c*,i (eq. 19);
+//                     bonds B(j) = {i : |x_ci − x_j| ≤ H_c*,i} (frozen for the sub-step); controlled = B(j) ≠ ∅
+//   add_accelerations boundary correction (eq. 15–16) for controlled particles; gather (ours, §a.10) for
+//                     unbonded particles of a target that is not full
+//   correct_positions iteration 0: the adaptive spring (eq. 17–18, once per sub-step);
+//                     every iteration: λ_i of the unilateral density constraint C_i = min(ρ_p,i/ρ_c,i − 1, 0)
+//                     at x* (eq. 6–8), then Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij (eq. 10), clamped
+// Fluid particle j belongs to one target (ParticleSet::target) and only that target's samples act on it:
+// "each model independently controls the fluid", and no particle can be pulled back and forth between
+// targets. Every loop is a gather with a fixed order, so a run is bit-identical for any thread count.
+#include "control/adaptive_params.h"
+#include "control/control_context.h"
+#include "control/nearest_seed_field.h"
+#include "core/kernels.h"
+#include "core/neighbor_grid.h"
+#include "sampling/control_set.h"
+#include "sim/controller.h"
+
+#include <vector>
+
+namespace ff::control {
+
+/// One target as the controllers see it: its samples (weights computed) and when it starts to act.
+struct ControlTarget {
+  sampling::ControlSet set;
+  double start = 0.0;  ///< s; before this the target attracts nothing
+};
+
+class AdaptiveController final : public sim::Controller {
+ public:
+  /// Every target's set must have the same support H_c (they are sampled at one spacing).
+  static Result<std::unique_ptr<AdaptiveController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                            const AdaptiveParams& params);
+
+  std::string_view name() const override { return "adaptive"; }
+  void begin_step(const sim::StepView& view, sim::ParticleSet& p) override;
+  void add_accelerations(const sim::StepView& view, sim::ParticleSet& p) override;
+  void correct_positions(const sim::StepView& view, sim::ParticleSet& p) override;
+
+  // Read-outs for metrics, tests and the viewer (valid after a step).
+  std::size_t control_count() const { return xc_.size(); }
+  std::span<const float> fill() const { return fill_; }          ///< ρ_p/ρ_c per sample at the start of the last sub-step
+  std::span<const Vec3f> control_positions() const { return xc_; }
+  std::span<const std::uint8_t> control_target() const { return tc_; }
+  float support() const { return hc_; }
+  float epsilon() const { return eps_c_; }
+  float g_ref() const { return g_ref_; }
+  std::size_t bond_count() const { return bond_idx_.size(); }
+  std::size_t scratch_bytes() const;
+
+ private:
+  AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc);
+  bool active(std::uint8_t t, double time) const { return t < start_.size() && time >= start_[t]; }
+  void adaptive_spring(sim::ParticleSet& p, float dt) const;
+  void control_correction(sim::ParticleSet& p, float dt);
+  void gather(const sim::StepView& view, sim::ParticleSet& p);
+
+  ControlContext ctx_;
+  AdaptiveParams params_;
+  float hc_ = 0, d_ = 0;
+  core::Poly6 poly6_;
+  core::Spiky spiky_;
+  float eps_c_ = 0;   // ε_c = epsilon · S_0
+  float g_ref_ = 0;   // max |Σ_j m_c ∇W(x_ci − x_cj)| over samples (eq. 15 threshold)
+  std::vector<float> mass_c_;  // m_c per target
+  std::vector<double> start_;  // per target
+
+  // Samples of all targets, flattened (SoA).
+  std::vector<Vec3f> xc_;
+  std::vector<float> rho_c_, phi_;  // ρ_c,i; φ̃_i (1 when weights are off)
+  std::vector<std::uint8_t> tc_;    // target of each sample
+  std::vector<Vec3f> grad_c_;       // n at each sample: −Σ_j m_c ∇W(x_ci − x_cj), outward (eq. 16)
+  core::NeighborGrid ctrl_grid_;    // over xc_ (static)
+
+  // Per sub-step.
+  double time_ = 0.0;
+  core::NeighborGrid fluid_grid_;
+  core::NeighborList cf_;           // sample i → fluid within H_c
+  core::NeighborList fc_;           // fluid j → samples within H_c
+  std::vector<float> rho_p_, fill_, hstar2_, lambda_;
+  std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples
+  std::vector<Index> seeds_;
+  std::vector<NearestSeedField> seed_field_;  // per target
+};
+
+}  // namespace ff::control

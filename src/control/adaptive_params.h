@@ -1,0 +1,59 @@
+#pragma once
+// Parameters of the paper's controller, `adaptive` (METHOD.md §a.2–§a.6, defaults of §a.9 and §a.10).
+// Every component can be switched off or set to its literal paper reading, so its contribution can be
+// measured (issue 4's ablations). JSON keys in scene files ("controller": {"adaptive": {...}}) are the
+// field names; enums are strings.
+#include "core/error.h"
+
+#include <optional>
+#include <string_view>
+
+namespace ff::control {
+
+/// Bond radius rule of eq. 19 (METHOD §a.5).
+enum class BondRadius {
+  OverFull,  ///< H_c* = H_c · min(1, 2ρ_c/(ρ_p + ρ_c)): shrinks only once a sample is over-full (default, §a.10)
+  Paper,     ///< H_c* = H_c · ρ_c/(ρ_p + ρ_c): the literal reading (halves the radius of every filled sample)
+};
+std::string_view bond_radius_name(BondRadius b);
+std::optional<BondRadius> parse_bond_radius(std::string_view s);
+
+/// The sub-step the clamp and the spring strength refer to (METHOD §0: Δt = 1/120 s).
+inline constexpr float kReferenceDt = 1.0f / 120.0f;
+
+struct AdaptiveParams {
+  bool weights = true;              ///< eq. 1–5: scale each sample's correction by φ̃; off → φ̃ = 1
+  bool boundary_correction = true;  ///< eq. 15–16: remove the outward part of a_ext at the target surface
+  bool bond_breaking = true;        ///< eq. 17–19: adaptive bond radius and soft spring; off → every pair within H_c is bonded, no spring
+  BondRadius bond_radius = BondRadius::OverFull;
+  bool gather = true;               ///< ours (§a.10): unbonded fluid is steered toward under-filled samples of its target
+  /// Kinematic control: the control correction and the spring move fluid without becoming velocity (an option
+  /// to measure). Off (default, the PBD reading): corrections become velocity like every constraint's, which is
+  /// what lets the control hold fluid up against gravity; kinematic control cannot cancel the velocity gravity
+  /// builds, and on the bunny the fluid fell through the target (E 5.5 %, 64 % inside, 32 % splash).
+  bool kinematic = false;
+  /// Speed limit of controlled fluid, in spacings d per second (ours): in the PBD reading an empty sample
+  /// accelerates its fluid at up to clamp · N_it · d / Δt² (≈ 17 g at the defaults) until it is full, the fluid
+  /// overshoots, and the CFL rule shrinks Δt without end (measured: 60 m/s after 5 frames). Limiting the speed
+  /// of bonded particles to the clamp's own inflow speed, clamp · N_it · d / Δt_ref = 48 d/s, keeps the
+  /// inflow the clamp sets (METHOD §a.3) and nothing faster. (0, 10000]
+  float max_speed = 48.0f;
+
+  float alpha = 0.5f;               ///< α of eq. 5/10, strength of the control correction. (0, 2]
+  float epsilon = 1.0f;             ///< ε_c of eq. 6 as a multiple of S_0 (Σ|g|² of a full neighbourhood). (0, 100]
+  /// Largest control correction per fluid particle and iteration, in spacings d, at the reference sub-step
+  /// Δt_ref = 1/120 s (METHOD §0); (0, 1]. A position correction of fixed size becomes a faster velocity as Δt
+  /// shrinks, and a faster velocity makes the CFL rule shrink Δt again: so the clamp (and the spring) are
+  /// scaled by Δt/Δt_ref, which keeps the inflow speed clamp · N_it · d / Δt_ref (48 d/s) whatever Δt is.
+  float clamp = 0.1f;
+  float gamma = 0.1f;               ///< γ_a of the adaptive spring (eq. 18 as §a.5), once per sub-step, at Δt_ref. [0, 1]
+  float normal_threshold = 0.25f;   ///< boundary correction only where |n| ≥ this × g_ref (eq. 15). [0, 1]
+  float gather_fill = 0.9f;         ///< a sample is under-filled while ρ_p/ρ_c < this. (0, 1]
+  float gather_speed = 20.0f;       ///< speed unbonded fluid is steered at, in spacings d per second. (0, 1000]
+  float gather_time = 0.1f;         ///< s, time constant with which the steering velocity is reached. (0, 10]
+
+  /// First violation, naming `path.key`, the value and the range.
+  Status validate(std::string_view path = "controller.adaptive") const;
+};
+
+}  // namespace ff::control
