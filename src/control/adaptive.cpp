@@ -1,6 +1,8 @@
 #include "control/adaptive.h"
 
+#include "core/pair_loop.h"
 #include "core/parallel.h"
+#include "core/simd.h"
 #include "sampling/weights.h"
 
 #include <fmt/format.h>
@@ -263,65 +265,130 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
 // Eq. 6–10 (METHOD §a.3): per sample λ_i = −C_i/(Σ_j |g_ij|² + ε_c) with C_i = min(ρ_p,i/ρ_c,i − 1, 0) at x*,
 // g_ij = −(m_p/ρ_c,i) ∇W(x_ci − x*_j); per fluid particle Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij, at most clamp·d.
 void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
+  using namespace core::simd;
   const std::size_t n = p.size(), m = xc_.size();
+  if (n == 0) return;
   Vec3f* xs = p.predicted.data();
   const std::uint8_t* tf = p.target.data();
   const float mp = ctx_.particle_mass, eps = eps_c_;
+  const bool multi = mass_c_.size() > 1;
+  const __m128 h = broadcast(spiky_.h), h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
+  // Pairs of another target are masked off (only in a multi-target scene: one target needs no test).
+  auto same_target = [&](const Index* j, std::uint8_t t) {
+    return _mm_castsi128_ps(_mm_setr_epi32(tf[j[0]] == t ? -1 : 0, tf[j[1]] == t ? -1 : 0, tf[j[2]] == t ? -1 : 0,
+                                           tf[j[3]] == t ? -1 : 0));
+  };
+  // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked).
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     lambda_[i] = 0.0f;
     const std::uint8_t t = tc_[i];
     if (!active(t, time_)) return;
     const Vec3f xi = xc_[i];
-    // Density first; the gradient sum (a square root per pair) only for the samples that are under-filled.
-    float sw = 0.0f;
+    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
     const auto range = cf_.of(i);
-    for (Index j : range)
-      if (tf[j] == t) sw += poly6_.w_r2((xi - xs[j]).squaredNorm());
-    const float c = mp * sw / rho_c_[i] - 1.0f;
+    auto r2_of = [&](const Index* j) {
+      const V3 xj = core::simd::gather(xs, j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+    };
+    // Density first; the gradient sum (a square root per pair) only for the samples that are under-filled.
+    __m128 sw = zero;
+    core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
+      const __m128 r2 = r2_of(j);
+      __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
+      if (multi) use = _mm_and_ps(use, same_target(j, t));
+      const __m128 q2 = _mm_sub_ps(h2, r2);
+      sw = _mm_add_ps(sw, select(use, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+    });
+    const float c = mp * poly6_.k * hsum(sw) / rho_c_[i] - 1.0f;
     if (c >= 0.0f) return;
-    float g2 = 0.0f;
-    for (Index j : range) {
-      if (tf[j] != t) continue;
-      const float r2 = (xi - xs[j]).squaredNorm();
-      if (r2 >= spiky_.h2) continue;
-      const float q = spiky_.h - std::sqrt(r2);
-      g2 += q * q * q * q;  // |∇W|² = kgrad² (h − r)⁴
-    }
+    __m128 g2 = zero;
+    core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
+      const __m128 r2 = r2_of(j);
+      __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
+      if (multi) use = _mm_and_ps(use, same_target(j, t));
+      const __m128 q = _mm_sub_ps(h, _mm_sqrt_ps(r2));
+      const __m128 q2 = _mm_mul_ps(q, q);
+      g2 = _mm_add_ps(g2, select(use, _mm_mul_ps(q2, q2)));  // |∇W|² = kgrad² (h − r)⁴
+    });
     const float k = mp / rho_c_[i] * spiky_.kgrad;
-    lambda_[i] = -c / (k * k * g2 + eps);
+    lambda_[i] = -c / (k * k * hsum(g2) + eps);
   });
-  if (core::deterministic_max(static_cast<std::int64_t>(m), 0.0, [&](std::int64_t i) {
-        return static_cast<double>(lambda_[static_cast<std::size_t>(i)]);
-      }) == 0.0)
-    return;  // every sample is full: no correction anywhere
+  active_.clear();
+  for (std::size_t i = 0; i < m; ++i)
+    if (lambda_[i] > 0.0f) active_.push_back(static_cast<Index>(i));
+  if (active_.empty()) return;  // every sample is full: no correction anywhere
+
   const float alpha = params_.alpha, max_dx = params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt),
               max_dx2 = max_dx * max_dx;
   Vec3f* shift = p.shift.data();
   const bool kinematic = params_.kinematic;
   const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
+  auto apply = [&](std::size_t j, Vec3f dx) {
+    dx *= alpha;
+    const float d2 = dx.squaredNorm();
+    if (d2 > max_dx2) dx *= max_dx / std::sqrt(d2);
+    xs[j] += dx;
+    if (kinematic) shift[j] += dx;
+  };
+  // Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij. Once a target has formed only a few (surface) samples are still under-filled:
+  // then the sum is scattered from those samples (serially, in sample order: deterministic), instead of
+  // every fluid particle walking its ~270 bonds to find them.
+  if (active_.size() * 8 < m) {
+    dx_.assign(n, Vec3f::Zero());
+    touched_.assign(n, 0);
+    const Vec3f* x = p.position.data();  // bonds were decided at the start of the sub-step
+    for (Index i : active_) {
+      const std::uint8_t t = tc_[i];
+      const Vec3f xi = xc_[i];
+      const float coef = phi_[i] * lambda_[i] * mp / rho_c_[i] * kg, hs2 = hstar2_[i];
+      for (Index j : cf_.of(i)) {
+        if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
+        const Vec3f r = xi - xs[j];
+        const float r2 = r.squaredNorm();
+        if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
+        const float len = std::sqrt(r2), q = spiky_.h - len;
+        dx_[j] += (coef * q * q / len) * r;
+        touched_[j] = 1;
+      }
+    }
+    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+      const auto j = static_cast<std::size_t>(jj);
+      if (touched_[j]) apply(j, dx_[j]);
+    });
+    return;
+  }
+  // Gather over the bonds, four at a time, with the per-sample factor φ̃ λ m_p/ρ_c kg precomputed (0 when full).
+  coef_.resize(m);
+  for (std::size_t i = 0; i < m; ++i) coef_[i] = lambda_[i] > 0.0f ? phi_[i] * lambda_[i] * mp / rho_c_[i] * kg : 0.0f;
+  const __m128 sh = broadcast(spiky_.h), sh2 = broadcast(spiky_.h2);
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     const Index b = bond_off_[j], e = bond_off_[j + 1];
     if (b == e) return;
     const Vec3f xj = xs[j];
-    Vec3f dx = Vec3f::Zero();
-    for (Index k = b; k < e; ++k) {
-      const Index i = bond_idx_[k];
-      const float l = lambda_[i];
-      if (l == 0.0f) continue;
-      const Vec3f r = xc_[i] - xj;
-      const float r2 = r.squaredNorm();
-      if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
-      const float len = std::sqrt(r2);
-      const float q = spiky_.h - len;
-      dx += (phi_[i] * l * mp / rho_c_[i] * kg * q * q / len) * r;
+    const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
+    __m128 dx = zero, dy = zero, dz = zero;
+    for (Index k = b; k < e; k += 4) {
+      const Index left = e - k;
+      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
+                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      const __m128 c4 = _mm_and_ps(core::simd::gather(coef_.data(), i0, i1, i2, i3), core::simd::first_lanes(left));
+      if (_mm_movemask_ps(_mm_cmpgt_ps(c4, zero)) == 0) continue;
+      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
+      const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 use = _mm_and_ps(_mm_cmplt_ps(r2, sh2), _mm_cmpgt_ps(r2, zero));
+      const __m128 len = _mm_sqrt_ps(r2);
+      const __m128 q = _mm_sub_ps(sh, len);
+      const __m128 w = select(use, _mm_div_ps(_mm_mul_ps(c4, _mm_mul_ps(q, q)), len));
+      dx = _mm_add_ps(dx, _mm_mul_ps(w, rx));
+      dy = _mm_add_ps(dy, _mm_mul_ps(w, ry));
+      dz = _mm_add_ps(dz, _mm_mul_ps(w, rz));
     }
-    dx *= alpha;
-    const float d2 = dx.squaredNorm();
-    if (d2 > max_dx2) dx *= max_dx / std::sqrt(d2);
-    xs[j] = xj + dx;
-    if (kinematic) shift[j] += dx;
+    const Vec3f d(hsum(dx), hsum(dy), hsum(dz));
+    if (d.squaredNorm() > 0.0f) apply(j, d);
   });
 }
 

@@ -83,7 +83,10 @@ class AdaptiveController final : public sim::Controller {
   core::NeighborList fc_;           // fluid j → samples within H_c
   std::vector<float> rho_p_, fill_, hstar2_, lambda_;
   std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples
-  std::vector<Index> seeds_;
+  std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
+  std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)
+  std::vector<std::uint8_t> touched_;
+  std::vector<float> coef_;              // φ̃ λ m_p/ρ_c kg per sample in the current iteration
   std::vector<NearestSeedField> seed_field_;  // per target
 };
 

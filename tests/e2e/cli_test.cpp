@@ -5,6 +5,7 @@
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <csignal>
@@ -356,6 +357,32 @@ TEST(Cli, RunSamplesTargetsOnceThenUsesTheCache) {
   const auto third = run({"run", scene.string(), "-o", (dir / "out").string()});
   ASSERT_EQ(third.code, 0) << third.err;
   EXPECT_NE(read_file(dir / "out" / "report.json").find("\"cached\": false"), std::string::npos);
+}
+
+// A scene of only a target: spacing, fluid, domain and controller come from the defaults; the run writes
+// the shape metrics per frame and per target, and the totals.
+TEST(Cli, RunWithOnlyATargetFormsItAndReportsShapeMetrics) {
+  const auto dir = test::temp_dir("target");
+  test::write_obj(dir / "ball.obj", test::sphere_mesh(0.3f, 3));
+  const auto scene = write_scene(dir, R"({"targets": [{"mesh": "ball.obj", "translate": [0, 0.5, 0]}],
+                                         "sampling": {"auto_count": 400}})");
+  const auto r = run({"run", scene.string(), "-o", (dir / "out").string(), "--frames", "90"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rep = nlohmann::json::parse(read_file(dir / "out" / "report.json"));
+  const auto& t = rep["totals"];
+  EXPECT_EQ(t["controller"], "adaptive");
+  ASSERT_TRUE(t["error_rate_pct"].is_number()) << t.dump();
+  EXPECT_LT(t["error_rate_pct"].get<double>(), 10.0) << t.dump();
+  EXPECT_GT(t["inside_fraction"].get<double>(), 0.8) << t.dump();
+  EXPECT_EQ(t["per_target"].size(), 1u);
+  const auto csv = read_file(dir / "out" / "metrics_targets.csv");
+  EXPECT_EQ(count_lines(csv), 92u);  // header + frames 0..90
+  EXPECT_NE(read_file(dir / "out" / "metrics.csv").find("error_rate_pct"), std::string::npos);
+
+  const auto bad = run({"run", scene.string(), "-o", (dir / "out2").string(), "--controller", "magic"});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("adaptive, none"), std::string::npos) << bad.err;
+  EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
 }
 
 }  // namespace
