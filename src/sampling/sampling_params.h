@@ -33,7 +33,10 @@ struct SamplingParams {
   std::size_t auto_count = 10'000; ///< samples aimed at when spacing is automatic. [100, 1e8]
   std::uint64_t seed = 1;          ///< random seed (results are deterministic for a seed)
   int relax_steps = 100;           ///< SPH relaxation steps of the blue-noise sampler. [0, 10000]
-  float support_factor = 4.0f;     ///< H_c = support_factor · d_c (METHOD §0: 4d). [1.5, 8]
+  /// H_c = support_factor · d_c. [1.5, 8] METHOD §0 proposes 4d and §a.10 asks for 3d to be measured: on the
+  /// default bunny 3d gave E 0.176 % against 0.278 % and 83 against 138 ms per frame (control–fluid pairs fall
+  /// from ~270 to ~110 per filled sample), so 3d is the default.
+  float support_factor = 3.0f;
   float phi_offset = 0.05f;        ///< c of eq. 4 (paper: 0 < c < 0.1). [0, 1]
   float rest_density = 1000.0f;    ///< ρ0 of the fluid the controls are calibrated to, kg/m³. (0, 1e5]
   std::size_t max_samples = 20'000'000;  ///< refuse to make more samples than this. [1, 1e9]

@@ -15,7 +15,7 @@
 namespace ff::sampling {
 
 struct WeightParams {
-  float support_factor = 4.0f;  ///< H_c / d_c
+  float support_factor = 3.0f;  ///< H_c / d_c (SamplingParams::support_factor says why 3)
   float phi_offset = 0.05f;     ///< c
   float rest_density = 1000.0f; ///< fluid ρ0, kg/m³
 };
