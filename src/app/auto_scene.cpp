@@ -2,6 +2,8 @@
 
 #include "io/load_mesh.h"
 #include "sampling/mesh_field.h"
+#include "sampling/samplers.h"
+#include "control/target_motion.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -33,7 +35,7 @@ Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene) {
   return out;
 }
 
-Status complete_scene(io::Scene& s, const std::vector<TargetGeometry>& targets) {
+Status complete_scene(io::Scene& s, std::vector<TargetGeometry>& targets) {
   if (targets.empty()) return {};
   double volume = 0.0, area = 0.0;
   for (const auto& t : targets) volume += t.volume, area += t.area;
@@ -46,6 +48,27 @@ Status complete_scene(io::Scene& s, const std::vector<TargetGeometry>& targets) 
     FF_CHECK(s.solver.validate());
   }
   const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
+  if (s.fluid.empty()) {
+    // The fluid matches the volume the control samples will stand for: the voxel count of the solid at the
+    // spacing (the union of overlapping parts, not the sum a divergence-theorem volume gives), less what the
+    // sparse-sampling options remove.
+    const float dc = s.sampling.spacing > 0.0f ? s.sampling.spacing : d;
+    volume = 0.0;
+    for (auto& t : targets) {
+      if (!(t.volume > 0.0)) continue;
+      auto field = sampling::MeshField::build(t.mesh);
+      if (!field) return field.error();
+      std::size_t kept = 0;
+      for (const Vec3f& x : sampling::voxel_samples(*field, dc)) {
+        bool dropped = false;
+        for (const auto& b : s.sampling.sparse.drop_boxes)
+          dropped = dropped || ((x.array() >= b.min.array()).all() && (x.array() <= b.max.array()).all());
+        kept += dropped ? 0 : 1;
+      }
+      t.volume = double(kept) * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+      volume += t.volume;
+    }
+  }
   if (s.fluid.empty()) {
     if (!(volume > 0.0))
       return input_error("the targets enclose no volume, so the fluid cannot be sized from them: add a \"fluid\" list");
@@ -70,7 +93,18 @@ Status complete_scene(io::Scene& s, const std::vector<TargetGeometry>& targets) 
   }
   if (s.auto_domain) {
     Aabb box;
-    for (const auto& t : targets) box.extend(t.box.min), box.extend(t.box.max);
+    for (std::size_t k = 0; k < targets.size(); ++k) {
+      const auto& t = targets[k];
+      box.extend(t.box.min), box.extend(t.box.max);
+      // A keyframed target sweeps a path: the domain holds its box at every keyframe.
+      const control::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth, 0.5f * (t.box.min + t.box.max)};
+      for (const auto& key : motion.keys) {
+        const control::Pose pose = motion.at(key.time);
+        for (int c = 0; c < 8; ++c)
+          box.extend(pose.apply(Vec3f(c & 1 ? t.box.max.x() : t.box.min.x(), c & 2 ? t.box.max.y() : t.box.min.y(),
+                                      c & 4 ? t.box.max.z() : t.box.min.z())));
+      }
+    }
     for (const auto& f : s.fluid) {
       if (f.shape == sim::FluidSource::Shape::Box) {
         box.extend(f.min), box.extend(f.max);

@@ -27,8 +27,10 @@ struct TargetGeometry {
 /// Loads every target with its transform. Errors name the target.
 Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene);
 
-/// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets.
-Status complete_scene(io::Scene& scene, const std::vector<TargetGeometry>& targets);
+/// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
+/// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at
+/// the sampling spacing, sparse-sampling drops removed), which is what the fluid is sized and shared by.
+Status complete_scene(io::Scene& scene, std::vector<TargetGeometry>& targets);
 
 /// Shares the fluid out among the targets by volume (METHOD: "fluid is shared out by volume"): target t gets
 /// round(N V_t / ΣV) particles, the ones nearest its centre among those not yet taken, larger targets first.

@@ -165,7 +165,14 @@ json scene_to_json(const io::Scene& s) {
   for (const auto& t : s.targets)
     j["targets"].push_back({{"mesh", t.mesh.string()}, {"scale", v3(t.transform.scale)},
                             {"rotate", v3(t.transform.rotate_deg)}, {"translate", v3(t.transform.translate)},
-                            {"start", t.start}});
+                            {"start", t.start}, {"interpolation", t.smooth ? "smooth" : "linear"},
+                            {"keyframes", [&] {
+                              json k = json::array();
+                              for (const auto& key : t.keyframes)
+                                k.push_back({{"time", key.time}, {"translate", v3(key.translate)},
+                                             {"rotate", v3(key.rotate_deg)}, {"scale", key.scale}});
+                              return k;
+                            }()}});
   j["output"] = {{"fps", s.output.fps}, {"frames", s.output.frames}, {"checkpoint_every", s.output.checkpoint_every},
                  {"velocity", s.output.velocity}};
   return j;
@@ -205,15 +212,19 @@ Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
 namespace {
 
 /// Per-frame shape metrics of every target, and their N_c-weighted aggregate into `row`.
-void measure_frame(const std::vector<metrics::TargetShape>& shapes, const sim::ParticleSet& p, float r, int frame,
-                   std::vector<std::uint8_t>& controlled, FrameRow& row, std::vector<TargetRow>& target_rows) {
+void measure_frame(const std::vector<metrics::TargetShape>& shapes, const std::vector<control::TargetMotion>& motion,
+                   double time, const sim::ParticleSet& p, float r, int frame, std::vector<std::uint8_t>& controlled,
+                   FrameRow& row, std::vector<TargetRow>& target_rows) {
   if (shapes.empty()) return;
   controlled.resize(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
   double w = 0, e = 0, ef = 0, eb = 0, efa = 0, in = 0, sp = 0;
   std::size_t ctrl = 0;
   for (std::size_t t = 0; t < shapes.size(); ++t) {
-    const auto m = metrics::measure(shapes[t], static_cast<std::uint8_t>(t), p.position, p.target, controlled, r);
+    // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose.
+    const control::Pose pose = motion[t].at(time);
+    const auto m = metrics::measure(shapes[t], static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
+                                    pose.rest_from_world(), pose.scale);
     target_rows.push_back({frame, static_cast<int>(t), m});
     const double nc = static_cast<double>(shapes[t].sample_count());
     ctrl += m.controlled;
@@ -276,6 +287,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   json targets_json = json::array();
   std::vector<control::ControlTarget> controls;
   std::vector<metrics::TargetShape> shapes;
+  std::vector<control::TargetMotion> motions;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), out / "cache", progress));
     for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
@@ -290,7 +302,10 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
     if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};
     shapes.push_back(std::move(*shape));
-    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start)});
+    control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,
+                                 0.5f * (geometry[i].box.min + geometry[i].box.max)};
+    motions.push_back(motion);
+    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion});
   }
 
   sim::ParticleSet particles;
@@ -326,7 +341,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     particles = std::move(initial);
     FF_CHECK(write_frame(out, 0, particles, scene.output.velocity, xs, vs, ts));
     FrameRow row{0, 0.0, particles.size(), 0.0, 0, 0, 0.0, 0.0, core::peak_rss_mib()};
-    measure_frame(shapes, particles, scene.solver.particle_radius, 0, flags, row, target_rows);
+    measure_frame(shapes, motions, 0.0, particles, scene.solver.particle_radius, 0, flags, row, target_rows);
     rows.push_back(row);
   }
   if (particles.size() == 0) return input_error("the scene creates no fluid particles");
@@ -445,7 +460,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     FrameRow row{f, time, particles.size(), seconds, stats->substeps, stats->times.iterations, stats->density_error_mean,
                  stats->density_error_max, core::peak_rss_mib()};
     row.control_seconds = stats->times.control;
-    measure_frame(shapes, particles, scene.solver.particle_radius, f, flags, row, target_rows);
+    measure_frame(shapes, motions, time, particles, scene.solver.particle_radius, f, flags, row, target_rows);
     rows.push_back(row);
     last_frame = f;
     const bool done = run_until_formed && formed_and_held(rows, window, 2 * window);

@@ -36,6 +36,9 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
     const auto& s = targets[t].set;
     c->mass_c_.push_back(s.mass);
     c->start_.push_back(targets[t].start);
+    FF_CHECK(targets[t].motion.validate(fmt::format("targets[{}]", t)));
+    c->motion_.push_back(targets[t].motion);
+    c->moving_ = c->moving_ || targets[t].motion.moving();
     for (std::size_t i = 0; i < s.size(); ++i) {
       c->xc_.push_back(s.position[i]);
       c->rho_c_.push_back(s.density[i]);
@@ -70,6 +73,11 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
     c->grad_c_[i] = -g;  // n at the sample: minus the control-density gradient, pointing out of the target
     return static_cast<double>(g.norm());
   }));
+  if (c->moving_) {
+    c->rest_x_ = c->xc_;
+    c->rest_grad_ = c->grad_c_;
+    c->move_targets(0.0);
+  }
   // The gather field covers the domain at the control support (coarser on a huge domain).
   c->seed_field_.resize(targets.size());
   for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, hc);
@@ -83,8 +91,24 @@ std::size_t AdaptiveController::scratch_bytes() const {
          vb(rho_p_) + vb(fill_) + vb(hstar2_) + vb(lambda_) + vb(bond_off_) + vb(bond_idx_) + vb(seeds_);
 }
 
+// Samples of keyframed targets follow their pose; densities keep their rest values (rigid motion keeps
+// them exactly; a scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow).
+void AdaptiveController::move_targets(double time) {
+  std::vector<Pose> pose(motion_.size());
+  for (std::size_t t = 0; t < motion_.size(); ++t) pose[t] = motion_[t].at(time);
+  parallel_for(static_cast<std::int64_t>(xc_.size()), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    const auto t = tc_[i];
+    if (!motion_[t].moving()) return;
+    xc_[i] = pose[t].apply(rest_x_[i]);
+    grad_c_[i] = pose[t].rotation * rest_grad_[i];
+  });
+  ctrl_grid_.build(xc_);
+}
+
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
+  if (moving_) move_targets(view.time);
   const std::size_t n = p.size(), m = xc_.size();
   const Vec3f* x = p.position.data();
   const std::uint8_t* tf = p.target.data();

@@ -15,6 +15,7 @@
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/nearest_seed_field.h"
+#include "control/target_motion.h"
 #include "core/kernels.h"
 #include "core/neighbor_grid.h"
 #include "sampling/control_set.h"
@@ -26,8 +27,9 @@ namespace ff::control {
 
 /// One target as the controllers see it: its samples (weights computed) and when it starts to act.
 struct ControlTarget {
-  sampling::ControlSet set;
-  double start = 0.0;  ///< s; before this the target attracts nothing
+  sampling::ControlSet set;  ///< samples in the rest pose
+  double start = 0.0;        ///< s; before this the target attracts nothing
+  TargetMotion motion;       ///< keyframes (none: static)
 };
 
 class AdaptiveController final : public sim::Controller {
@@ -74,6 +76,10 @@ class AdaptiveController final : public sim::Controller {
   std::vector<float> rho_c_, phi_;  // ρ_c,i; φ̃_i (1 when weights are off)
   std::vector<std::uint8_t> tc_;    // target of each sample
   std::vector<Vec3f> grad_c_;       // n at each sample: −Σ_j m_c ∇W(x_ci − x_cj), outward (eq. 16)
+  std::vector<Vec3f> rest_x_, rest_grad_;  // rest pose of xc_ and grad_c_ (moving targets only)
+  std::vector<TargetMotion> motion_;       // per target
+  bool moving_ = false;
+  void move_targets(double time);
   core::NeighborGrid ctrl_grid_;    // over xc_ (static)
 
   // Per sub-step.

@@ -31,6 +31,7 @@ Status Scene::validate() const {
     FF_CHECK(core::check_vec(p, "rotate", targets[i].transform.rotate_deg, -1e6, 1e6));
     FF_CHECK(core::check_vec(p, "translate", targets[i].transform.translate, -1e9, 1e9));
     FF_CHECK(core::check_range(p, "start", targets[i].start, 0.0, 1e6));
+    FF_CHECK((control::TargetMotion{targets[i].keyframes, targets[i].smooth, Vec3f::Zero()}.validate(p)));
   }
   FF_CHECK(controller.validate());
   if (fluid.empty() && targets.empty())
@@ -117,6 +118,26 @@ Status read_targets(const json& j, const fs::path& base, std::vector<TargetSpec>
     FF_CHECK(o.get("rotate", t.transform.rotate_deg));
     FF_CHECK(o.get("translate", t.transform.translate));
     FF_CHECK(o.get("start", t.start));
+    std::string interp;
+    FF_CHECK(o.get("interpolation", interp));
+    if (!interp.empty() && interp != "linear" && interp != "smooth")
+      return param_error(fmt::format("targets[{}].interpolation = \"{}\" is not one of: linear, smooth", i, interp));
+    t.smooth = interp == "smooth";
+    if (const json* keys = o.child("keyframes")) {
+      if (!keys->is_array()) return param_error(fmt::format("targets[{}].keyframes: expected a list of keyframes", i));
+      for (std::size_t k = 0; k < keys->size(); ++k) {
+        JsonObject ko((*keys)[k], fmt::format("targets[{}].keyframes[{}]", i, k));
+        FF_CHECK(ko.check_object());
+        control::Keyframe key;
+        if (!ko.has("time")) return param_error(fmt::format("targets[{}].keyframes[{}]: \"time\" is required", i, k));
+        FF_CHECK(ko.get("time", key.time));
+        FF_CHECK(ko.get("translate", key.translate));
+        FF_CHECK(ko.get("rotate", key.rotate_deg));
+        FF_CHECK(ko.get("scale", key.scale));
+        FF_CHECK(ko.finish());
+        t.keyframes.push_back(key);
+      }
+    }
     FF_CHECK(o.finish());
     out.push_back(std::move(t));
   }

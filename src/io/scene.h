@@ -33,6 +33,10 @@ struct TargetSpec {
   std::filesystem::path mesh;  ///< resolved against the scene file's folder
   MeshTransform transform;     ///< scale, rotate (degrees), translate — applied in that order
   float start = 0.0f;          ///< s, when the target starts to attract fluid. [0, 1e6]
+  /// Keyframed motion after the transform (translate/rotate/scale about the target's centre), see
+  /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
+  std::vector<control::Keyframe> keyframes;
+  bool smooth = false;         ///< "interpolation": "smooth" (smoothstep) or "linear" (default)
 };
 
 struct OutputParams {

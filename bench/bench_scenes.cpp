@@ -1,0 +1,167 @@
+// The controller's scene benchmark (issue 4): each scene run by `fluidform run` in its own process (so peak
+// memory is its own), with the defaults only, then one table of the paper's Table 3 columns and the numbers
+// that keep E honest (METHOD §d). Scenes: the bunny, a thin-limbed star figure, a hollow vase, a torus, a
+// lattice of thin tubes, the bunny with 30 % of its samples removed in a box, and three targets at once.
+//   build/release/bench/bench_scenes [--quick] [--ablations] [--only NAME] [--frames N] [--keep DIR]
+// --quick: ~3k control particles per scene instead of ~10k. --ablations: the bunny and the star with each
+// component of `adaptive` switched off or set to its paper reading. Runs stop once formed (cap 600 frames)
+// unless --frames is given.
+#include "support/shapes.h"
+#include "support/test_support.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace ff;
+
+namespace {
+
+io::TriangleMesh star_figure() {
+  // A body with four thin limbs and a head: parts overlap (the winding number makes them one solid).
+  io::TriangleMesh m = test::translate(test::box(Vec3f(0.12f, 0.25f, 0.08f)), Vec3f(0, 0.55f, 0));
+  m = test::merge(m, test::translate(test::uv_sphere(0.1f, 24), Vec3f(0, 0.9f, 0)));
+  m = test::merge(m, test::translate(test::box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(-0.07f, 0.2f, 0)));
+  m = test::merge(m, test::translate(test::box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(0.07f, 0.2f, 0)));
+  m = test::merge(m, test::translate(test::box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(-0.3f, 0.7f, 0)));
+  m = test::merge(m, test::translate(test::box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(0.3f, 0.7f, 0)));
+  return m;
+}
+
+io::TriangleMesh tube_lattice() {
+  // 3 × 3 vertical and 3 × 3 horizontal square tubes of 0.07 m through a 0.8 m cube (carbon-tube-like).
+  io::TriangleMesh m;
+  bool first = true;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      const float u = -0.3f + 0.3f * float(a), v = -0.3f + 0.3f * float(b);
+      auto vert = test::translate(test::box(Vec3f(0.035f, 0.4f, 0.035f)), Vec3f(u, 0.4f, v));
+      auto hori = test::translate(test::box(Vec3f(0.4f, 0.035f, 0.035f)), Vec3f(0, 0.1f + 0.3f * float(a), v));
+      m = first ? vert : test::merge(m, vert);
+      m = test::merge(m, hori);
+      first = false;
+    }
+  return m;
+}
+
+struct Scene {
+  std::string name;
+  json scene;
+};
+
+std::string run(const std::string& cmd) {
+  std::string out;
+  FILE* f = ::popen(cmd.c_str(), "r");
+  if (!f) return out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, f)) out += buf;
+  ::pclose(f);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false, ablations = false;
+  std::string only, frames;
+  fs::path keep;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") quick = true;
+    else if (a == "--ablations") ablations = true;
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--frames" && i + 1 < argc) frames = argv[++i];
+    else if (a == "--keep" && i + 1 < argc) keep = argv[++i];
+    else {
+      fmt::print(stderr, "usage: bench_scenes [--quick] [--ablations] [--only NAME] [--frames N] [--keep DIR]\n");
+      return 2;
+    }
+  }
+  const fs::path dir = keep.empty() ? test::temp_dir("scenes") : keep;
+  fs::create_directories(dir);
+  auto bunny = test::stanford_bunny();
+  if (!bunny) {
+    fmt::print(stderr, "{}\n", bunny.error().message);
+    return 1;
+  }
+  test::write_obj(dir / "bunny.obj", *bunny);
+  test::write_obj(dir / "star.obj", star_figure());
+  test::write_obj(dir / "vase.obj", test::vase(1.0f, 0.35f, 0.06f));
+  test::write_obj(dir / "torus.obj", test::torus(0.4f, 0.12f, 64, 24));
+  test::write_obj(dir / "lattice.obj", tube_lattice());
+  const int count = quick ? 3000 : 10000;
+  auto target = [](const char* mesh, json extra = json::object()) {
+    json t = {{"mesh", mesh}};
+    for (auto& [k, v] : extra.items()) t[k] = v;
+    return t;
+  };
+  auto scene = [&](json targets, json extra = json::object()) {
+    json s = {{"targets", targets}, {"sampling", {{"auto_count", count}}}};
+    for (auto& [k, v] : extra.items()) s[k] = v;
+    return s;
+  };
+  const json bunny_t = target("bunny.obj", {{"scale", 0.1}});
+  std::vector<Scene> scenes;
+  if (!ablations) {
+    scenes.push_back({"bunny", scene({bunny_t})});
+    scenes.push_back({"star", scene({target("star.obj")})});
+    scenes.push_back({"vase", scene({target("vase.obj")})});
+    scenes.push_back({"torus", scene({target("torus.obj")})});
+    scenes.push_back({"lattice", scene({target("lattice.obj")})});
+    // Sparse: 30 % of the bunny's samples removed in a box (its head and ears side, x ≤ −0.17 m; paper Fig. 3).
+    scenes.push_back({"bunny-sparse", scene({bunny_t}, {{"sampling", {{"auto_count", count},
+        {"sparse", {{"drop_boxes", json::array({{{"min", {-0.5, 0.0, -0.4}}, {"max", {-0.17, 1.0, 0.4}}}})}}}}}})});
+    scenes.push_back({"three-targets", scene({target("bunny.obj", {{"scale", 0.06}, {"translate", {-0.9, 0, 0}}}),
+                                              target("torus.obj", {{"scale", 0.7}, {"translate", {0, 0.2, 0}}}),
+                                              target("vase.obj", {{"scale", 0.7}, {"translate", {0.9, 0, 0}}})})});
+  } else {
+    const std::vector<std::pair<std::string, json>> variants = {
+        {"default", json::object()},
+        {"weights off", {{"weights", false}}},
+        {"boundary correction off", {{"boundary_correction", false}}},
+        {"bond radius: paper", {{"bond_radius", "paper"}}},
+        {"bond breaking off", {{"bond_breaking", false}}},
+        {"gather off", {{"gather", false}}},
+        {"kinematic control", {{"kinematic", true}}}};
+    for (const auto& [shape, t] : {std::pair{std::string("bunny"), bunny_t}, std::pair{std::string("star"), target("star.obj")}})
+      for (const auto& [vname, v] : variants)
+        scenes.push_back({shape + ", " + vname, scene({t}, {{"controller", {{"adaptive", v}}}})});
+  }
+  fmt::print("| scene | particles | controls | controlled/N_c | E (%) | E (d) | inside (%) | splash (%) | E_fwd all (m) "
+             "| time to form (s) | frame (ms) | fps | memory (MiB) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (std::size_t k = 0; k < scenes.size(); ++k) {
+    const auto& s = scenes[k];
+    if (!only.empty() && s.name.find(only) == std::string::npos) continue;
+    const fs::path file = dir / fmt::format("scene_{}.json", k), out = dir / fmt::format("out_{}", k);
+    std::ofstream(file) << s.scene.dump(2);
+    const std::string cmd = fmt::format("'{}' -q run '{}' -o '{}' {} 2>&1", test::binary().string(), file.string(),
+                                        out.string(), frames.empty() ? "" : "--frames " + frames);
+    const std::string log = run(cmd);
+    std::ifstream in(out / "report.json");
+    json rep = json::parse(in, nullptr, false);
+    if (rep.is_discarded() || !rep.contains("totals") || rep["status"] != "ok") {
+      fmt::print("| {} | failure | | | | | | | | | | | |\n", s.name);
+      fmt::print(stderr, "{}: {}\n", s.name, log);
+      continue;
+    }
+    const json& t = rep["totals"];
+    auto num = [&](const char* key) { return t.contains(key) && t[key].is_number() ? t[key].get<double>() : NAN; };
+    const double ms = 1e3 * num("mean_step_time_s");
+    fmt::print("| {} | {} | {} | {:.2f} | {:.3f} | {:.2f} | {:.2f} | {:.2f} | {:.4f} | {:.2f} | {:.1f} | {:.1f} | {:.0f} |\n",
+               s.name, t["particles"].get<long>(), t["control_particles"].get<long>(), num("controlled_per_control"),
+               num("error_rate_pct"), num("error_spacings"), 100 * num("inside_fraction"), 100 * num("splash_fraction"),
+               num("e_fwd_all_m"), num("time_to_form_s"), ms, 1e3 / ms, num("peak_memory_mb"));
+    std::fflush(stdout);
+  }
+  if (keep.empty()) fs::remove_all(dir);
+  return 0;
+}
