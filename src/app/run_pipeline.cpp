@@ -212,7 +212,18 @@ Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
 namespace {
 
 /// Per-frame shape metrics of every target, and their N_c-weighted aggregate into `row`.
-void measure_frame(const std::vector<metrics::TargetShape>& shapes, const std::vector<control::TargetMotion>& motion,
+/// A target's shapes over time: its mesh, then each swapped-in mesh from its time on.
+struct TargetShapes {
+  std::vector<double> from;  // from[0] = −∞
+  std::vector<metrics::TargetShape> shape;
+  const metrics::TargetShape& at(double t) const {
+    std::size_t k = 0;
+    while (k + 1 < from.size() && t >= from[k + 1]) ++k;
+    return shape[k];
+  }
+};
+
+void measure_frame(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motion,
                    double time, const sim::ParticleSet& p, float r, int frame, std::vector<std::uint8_t>& controlled,
                    FrameRow& row, std::vector<TargetRow>& target_rows) {
   if (shapes.empty()) return;
@@ -223,10 +234,11 @@ void measure_frame(const std::vector<metrics::TargetShape>& shapes, const std::v
   for (std::size_t t = 0; t < shapes.size(); ++t) {
     // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose.
     const control::Pose pose = motion[t].at(time);
-    const auto m = metrics::measure(shapes[t], static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
+    const metrics::TargetShape& shape = shapes[t].at(time);
+    const auto m = metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
                                     pose.rest_from_world(), pose.scale);
     target_rows.push_back({frame, static_cast<int>(t), m});
-    const double nc = static_cast<double>(shapes[t].sample_count());
+    const double nc = static_cast<double>(shape.sample_count());
     ctrl += m.controlled;
     w += nc, e += nc * m.error_rate, ef += nc * m.e_fwd, eb += nc * m.e_bwd, efa += nc * m.e_fwd_all;
     in += nc * m.inside_fraction, sp += nc * m.splash_fraction;
@@ -286,7 +298,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   sp.rest_density = scene.solver.rest_density;
   json targets_json = json::array();
   std::vector<control::ControlTarget> controls;
-  std::vector<metrics::TargetShape> shapes;
+  std::vector<TargetShapes> shapes;
   std::vector<control::TargetMotion> motions;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), out / "cache", progress));
@@ -301,11 +313,31 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
                             {"controls", fs::relative(tc.cache_file, out).string()}});
     auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
     if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};
-    shapes.push_back(std::move(*shape));
+    TargetShapes ts;
+    ts.from.push_back(-INFINITY);
+    ts.shape.push_back(std::move(*shape));
+    // Mesh swaps (morph): each swapped-in mesh is sampled (and cached) like a target of its own.
+    std::vector<std::pair<double, sampling::ControlSet>> swaps;
+    for (std::size_t k = 0; k < scene.targets[i].swaps.size(); ++k) {
+      io::TargetSpec spec = scene.targets[i];
+      spec.mesh = scene.targets[i].swaps[k].mesh;
+      FF_TRY(TargetControls sw, prepare_target(spec, sp, static_cast<std::uint8_t>(i), out / "cache", progress));
+      io::MeshLoadStats st;
+      auto mesh = io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st);
+      if (!mesh) return Error{mesh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, mesh.error().message)};
+      auto sh = metrics::TargetShape::build(*mesh, sw.set.position, sw.set.spacing);
+      if (!sh) return Error{sh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, sh.error().message)};
+      spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, spec.mesh.filename().string(),
+                   scene.targets[i].swaps[k].time, sw.set.size());
+      ts.from.push_back(scene.targets[i].swaps[k].time);
+      ts.shape.push_back(std::move(*sh));
+      swaps.emplace_back(scene.targets[i].swaps[k].time, std::move(sw.set));
+    }
+    shapes.push_back(std::move(ts));
     control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,
                                  0.5f * (geometry[i].box.min + geometry[i].box.max)};
     motions.push_back(motion);
-    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion});
+    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion, std::move(swaps)});
   }
 
   sim::ParticleSet particles;
@@ -413,9 +445,10 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
                        {"controlled", lastk ? lastk->m.controlled : 0},
                        {"inside_fraction", lastk ? num(lastk->m.inside_fraction) : json(nullptr)},
                        {"splash_fraction", lastk ? num(lastk->m.splash_fraction) : json(nullptr)},
-                       {"error_spacings", num(sk.steady * shapes[k].diagonal() / (100.0 * scene.solver.spacing()))}});
-        es_w += double(shapes[k].sample_count()) * sk.steady * shapes[k].diagonal() / (100.0 * scene.solver.spacing());
-        es_n += double(shapes[k].sample_count());
+                       {"error_spacings", num(sk.steady * shapes[k].shape.back().diagonal() / (100.0 * scene.solver.spacing()))}});
+        es_w += double(shapes[k].shape.back().sample_count()) * sk.steady * shapes[k].shape.back().diagonal() /
+                (100.0 * scene.solver.spacing());
+        es_n += double(shapes[k].shape.back().sample_count());
       }
       t["per_target"] = per;
       t["error_spacings"] = num(es_w / es_n);

@@ -33,19 +33,24 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
   }
   std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, hc));
   for (std::size_t t = 0; t < targets.size(); ++t) {
-    const auto& s = targets[t].set;
-    c->mass_c_.push_back(s.mass);
     c->start_.push_back(targets[t].start);
     FF_CHECK(targets[t].motion.validate(fmt::format("targets[{}]", t)));
     c->motion_.push_back(targets[t].motion);
     c->moving_ = c->moving_ || targets[t].motion.moving();
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      c->xc_.push_back(s.position[i]);
-      c->rho_c_.push_back(s.density[i]);
-      c->phi_.push_back(params.weights ? s.phi[i] : 1.0f);
-      c->tc_.push_back(static_cast<std::uint8_t>(t));
+    std::vector<Phase> phases;
+    phases.push_back({-INFINITY, std::move(targets[t].set)});
+    double last = -INFINITY;
+    for (auto& [time, set] : targets[t].swaps) {
+      if (!(time > last) || !std::isfinite(time))
+        return param_error(fmt::format("targets[{}]: mesh swaps must come at increasing, finite times", t));
+      if (!set.consistent() || set.size() == 0 || std::abs(set.support - hc) > 1e-4f * hc || !(set.mass > 0.0f))
+        return param_error(fmt::format("targets[{}]: a swapped-in mesh has no control samples at the target's support", t));
+      last = time;
+      phases.push_back({time, std::move(set)});
     }
+    c->phases_.push_back(std::move(phases));
   }
+  c->current_.assign(targets.size(), 0);
   const float d = ctx.spacing(), mp = ctx.particle_mass;
   // ε_c = epsilon · S_0, S_0 = Σ_j |g_j|² over a full resting lattice neighbourhood, g_j = (m_p/ρ_ref) ∇W(k d, H_c)
   // with ρ_ref the lattice's kernel-sum density at H_c: what a filled interior sample sees (METHOD §a.3).
@@ -59,30 +64,47 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
         s0 += ((mp / rho_ref) * c->spiky_.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
       }
   c->eps_c_ = static_cast<float>(params.epsilon * s0);
-  // g_ref: the largest control-density gradient, which is found at the target surface (eq. 15 threshold).
-  c->ctrl_grid_.build(c->xc_);
-  core::NeighborList self;
-  c->ctrl_grid_.query(c->xc_, c->xc_, hc, self);
-  const auto m = static_cast<std::int64_t>(c->xc_.size());
-  c->grad_c_.resize(c->xc_.size());
-  c->g_ref_ = static_cast<float>(core::deterministic_max(m, 0.0, [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    Vec3f g = Vec3f::Zero();
-    for (Index j : self.of(i))
-      if (c->tc_[j] == c->tc_[i]) g += c->mass_c_[c->tc_[i]] * c->spiky_.grad(c->xc_[i] - c->xc_[j]);
-    c->grad_c_[i] = -g;  // n at the sample: minus the control-density gradient, pointing out of the target
-    return static_cast<double>(g.norm());
-  }));
-  if (c->moving_) {
-    c->rest_x_ = c->xc_;
-    c->rest_grad_ = c->grad_c_;
-    c->move_targets(0.0);
-  }
+  c->flatten();
   // The gather field covers the domain at the control support (coarser on a huge domain).
   c->seed_field_.resize(targets.size());
   for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, hc);
-  c->fill_.assign(c->xc_.size(), 0.0f);
   return c;
+}
+
+// The samples of every target's current phase, flattened into the SoA arrays the loops use, with the
+// per-sample boundary normals and g_ref (eq. 15–16). Run at the start and whenever a target swaps its mesh.
+void AdaptiveController::flatten() {
+  xc_.clear(), rho_c_.clear(), phi_.clear(), tc_.clear(), mass_c_.clear();
+  for (std::size_t t = 0; t < phases_.size(); ++t) {
+    const auto& s = phases_[t][current_[t]].set;
+    mass_c_.push_back(s.mass);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      xc_.push_back(s.position[i]);
+      rho_c_.push_back(s.density[i]);
+      phi_.push_back(params_.weights ? s.phi[i] : 1.0f);
+      tc_.push_back(static_cast<std::uint8_t>(t));
+    }
+  }
+  // g_ref: the largest control-density gradient, which is found at the target surface (eq. 15 threshold).
+  ctrl_grid_.build(xc_);
+  core::NeighborList self;
+  ctrl_grid_.query(xc_, xc_, hc_, self);
+  const auto m = static_cast<std::int64_t>(xc_.size());
+  grad_c_.resize(xc_.size());
+  g_ref_ = static_cast<float>(core::deterministic_max(m, 0.0, [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    Vec3f g = Vec3f::Zero();
+    for (Index j : self.of(i))
+      if (tc_[j] == tc_[i]) g += mass_c_[tc_[i]] * spiky_.grad(xc_[i] - xc_[j]);
+    grad_c_[i] = -g;  // n at the sample: minus the control-density gradient, pointing out of the target
+    return static_cast<double>(g.norm());
+  }));
+  if (moving_) {
+    rest_x_ = xc_;
+    rest_grad_ = grad_c_;
+    move_targets(time_);
+  }
+  fill_.assign(xc_.size(), 0.0f);
 }
 
 std::size_t AdaptiveController::scratch_bytes() const {
@@ -108,7 +130,13 @@ void AdaptiveController::move_targets(double time) {
 
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
-  if (moving_) move_targets(view.time);
+  // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
+  // the new samples pull it into the new shape.
+  bool swapped = false;
+  for (std::size_t t = 0; t < phases_.size(); ++t)
+    while (current_[t] + 1 < phases_[t].size() && view.time >= phases_[t][current_[t] + 1].time) ++current_[t], swapped = true;
+  if (swapped) flatten();
+  else if (moving_) move_targets(view.time);
   const std::size_t n = p.size(), m = xc_.size();
   const Vec3f* x = p.position.data();
   const std::uint8_t* tf = p.target.data();

@@ -30,6 +30,8 @@ struct ControlTarget {
   sampling::ControlSet set;  ///< samples in the rest pose
   double start = 0.0;        ///< s; before this the target attracts nothing
   TargetMotion motion;       ///< keyframes (none: static)
+  /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
+  std::vector<std::pair<double, sampling::ControlSet>> swaps;
 };
 
 class AdaptiveController final : public sim::Controller {
@@ -80,6 +82,13 @@ class AdaptiveController final : public sim::Controller {
   std::vector<TargetMotion> motion_;       // per target
   bool moving_ = false;
   void move_targets(double time);
+  void flatten();
+  struct Phase {
+    double time;
+    sampling::ControlSet set;
+  };
+  std::vector<std::vector<Phase>> phases_;  // per target: its sample sets in time order
+  std::vector<std::size_t> current_;        // per target: the phase in use
   core::NeighborGrid ctrl_grid_;    // over xc_ (static)
 
   // Per sub-step.

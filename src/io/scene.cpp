@@ -138,6 +138,24 @@ Status read_targets(const json& j, const fs::path& base, std::vector<TargetSpec>
         t.keyframes.push_back(key);
       }
     }
+    if (const json* morph = o.child("morph")) {
+      if (!morph->is_array()) return param_error(fmt::format("targets[{}].morph: expected a list of {{\"time\", \"mesh\"}}", i));
+      for (std::size_t k = 0; k < morph->size(); ++k) {
+        JsonObject mo((*morph)[k], fmt::format("targets[{}].morph[{}]", i, k));
+        FF_CHECK(mo.check_object());
+        TargetSpec::Swap sw;
+        std::string m;
+        if (!mo.has("time") || !mo.has("mesh"))
+          return param_error(fmt::format("targets[{}].morph[{}]: \"time\" and \"mesh\" are required", i, k));
+        FF_CHECK(mo.get("time", sw.time));
+        FF_CHECK(mo.get("mesh", m));
+        FF_CHECK(mo.finish());
+        if (!(sw.time >= 0.0 && sw.time <= 1e6) || (!t.swaps.empty() && !(sw.time > t.swaps.back().time)))
+          return param_error(fmt::format("targets[{}].morph[{}].time = {} must be in [0, 1e6] and later than the swap before it", i, k, sw.time));
+        sw.mesh = fs::path(m).is_absolute() ? fs::path(m) : base / m;
+        t.swaps.push_back(std::move(sw));
+      }
+    }
     FF_CHECK(o.finish());
     out.push_back(std::move(t));
   }

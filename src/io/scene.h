@@ -37,6 +37,12 @@ struct TargetSpec {
   /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
   std::vector<control::Keyframe> keyframes;
   bool smooth = false;         ///< "interpolation": "smooth" (smoothstep) or "linear" (default)
+  /// Mesh swaps, "morph": [{"time": T, "mesh": PATH}, ...]: from T on the target is that mesh (same transform).
+  struct Swap {
+    double time = 0.0;
+    std::filesystem::path mesh;
+  };
+  std::vector<Swap> swaps;
 };
 
 struct OutputParams {

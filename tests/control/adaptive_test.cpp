@@ -50,7 +50,9 @@ struct Outcome {
 };
 
 Outcome simulate(const Case& c, const std::string& controller, int frames, const control::AdaptiveParams& ap = {},
-                 const control::TargetMotion& motion = {}) {
+                 const control::TargetMotion& motion = {},
+                 const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
+                 const Case* measure_against = nullptr) {
   sim::ParticleSet p;
   EXPECT_TRUE(sim::fill_sources(c.fluid, c.dom, c.sp.particle_radius, p).ok());
   std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
@@ -59,14 +61,19 @@ Outcome simulate(const Case& c, const std::string& controller, int frames, const
   spec.name = controller;
   spec.adaptive = ap;
   control::ControlContext ctx{c.sp.particle_radius, solver.particle_mass(), c.sp.rest_density, c.sp.gravity, c.dom};
-  auto ctl = control::make_controller(spec, {{c.set, 0.0, motion}}, ctx);
+  std::vector<control::ControlTarget> targets(1);
+  targets[0].set = c.set;
+  targets[0].motion = motion;
+  targets[0].swaps = swaps;
+  auto ctl = control::make_controller(spec, std::move(targets), ctx);
   EXPECT_TRUE(ctl.has_value()) << (ctl ? "" : ctl.error().message);
   for (int f = 0; f < frames; ++f) {
     auto st = solver.advance(p, f / 60.0, 1.0 / 60.0, **ctl);
     EXPECT_TRUE(st.has_value()) << (st ? "" : st.error().message);
     if (!st) break;
   }
-  auto shape = metrics::TargetShape::build(c.mesh, c.set.position, c.set.spacing);
+  const Case& m = measure_against ? *measure_against : c;
+  auto shape = metrics::TargetShape::build(m.mesh, m.set.position, m.set.spacing);
   EXPECT_TRUE(shape.has_value());
   std::vector<std::uint8_t> controlled(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
@@ -122,6 +129,27 @@ TEST(Adaptive, AMovingTargetStaysFormedWhileItMoves) {
   EXPECT_LT(moving.m.error_rate, still.m.error_rate + 1.5);
   std::printf("sphere at 3.5 s: still E %.2f %%, moving at 0.25 m/s E %.2f %% (%.2f d), inside %.3f\n", still.m.error_rate,
               moving.m.error_rate, moving.m.error_spacings, moving.m.inside_fraction);
+}
+
+TEST(Adaptive, AMeshSwapMorphsTheFormedShape) {
+  // The sphere, formed by 2 s, becomes a flat slab of the same volume at 2 s; by 5 s the fluid has the slab's
+  // shape: its error against the slab falls well below the unmorphed sphere's error against the slab.
+  const Case c = sphere_case();
+  Case b = c;
+  b.mesh = test::translate(test::box(Vec3f(0.32f, 0.08f, 0.32f)), Vec3f(0.0f, 0.45f, 0.0f));
+  sampling::SamplingParams smp;
+  smp.spacing = c.sp.spacing();
+  smp.method = sampling::Method::Voxel;
+  auto set = sampling::sample_target(b.mesh, smp);
+  ASSERT_TRUE(set.has_value());
+  b.set = std::move(*set);
+  const auto sphere_vs_box = simulate(c, "adaptive", 300, {}, {}, {}, &b);
+  const auto morphed = simulate(c, "adaptive", 300, {}, {}, {{2.0, b.set}}, &b);
+  EXPECT_LT(morphed.m.error_rate, 0.5 * sphere_vs_box.m.error_rate)
+      << morphed.m.error_rate << " vs " << sphere_vs_box.m.error_rate;
+  EXPECT_GT(morphed.m.inside_fraction, 0.9);
+  std::printf("morph sphere -> slab at 2 s, at 5 s: E vs slab %.2f %%, inside %.3f (unmorphed sphere vs slab %.2f %%)\n",
+              morphed.m.error_rate, morphed.m.inside_fraction, sphere_vs_box.m.error_rate);
 }
 
 TEST(Adaptive, IsIndependentOfTheThreadCount) {

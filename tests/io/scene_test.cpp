@@ -87,6 +87,42 @@ TEST(Scene, NanIsRejectedByRangeChecks) {
   EXPECT_NE(p.validate().error().message.find("solver.viscosity"), std::string::npos);
 }
 
+TEST(Scene, TargetOnlySceneControllerKeyframesAndMorphParse) {
+  auto s = parse(R"({"targets": [{"mesh": "a.obj", "interpolation": "smooth",
+      "keyframes": [{"time": 1, "translate": [0.5, 0, 0]}, {"time": 2, "rotate": [0, 90, 0], "scale": 1.5}],
+      "morph": [{"time": 3, "mesh": "b.obj"}]}],
+    "controller": {"name": "adaptive", "adaptive": {"gather": false, "bond_radius": "paper"}}})");
+  ASSERT_TRUE(s.has_value()) << s.error().message;
+  EXPECT_TRUE(s->fluid.empty());
+  EXPECT_TRUE(s->auto_radius && s->auto_domain && s->auto_frames);
+  ASSERT_EQ(s->targets[0].keyframes.size(), 2u);
+  EXPECT_TRUE(s->targets[0].smooth);
+  EXPECT_FLOAT_EQ(s->targets[0].keyframes[1].scale, 1.5f);
+  ASSERT_EQ(s->targets[0].swaps.size(), 1u);
+  EXPECT_EQ(s->targets[0].swaps[0].mesh, std::filesystem::path("/base/b.obj"));
+  EXPECT_FALSE(s->controller.adaptive.gather);
+  EXPECT_EQ(s->controller.adaptive.bond_radius, control::BondRadius::Paper);
+}
+
+TEST(Scene, BadControllerKeyframeAndMorphEntriesAreOneLineErrors) {
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj"}], "controller": {"name": "magic"}})").find("adaptive, none"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj"}], "controller": {"adaptive": {"alpah": 1}}})").find("alpha"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj"}], "controller": {"adaptive": {"clamp": 5}}})")
+                .find("controller.adaptive.clamp"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj", "keyframes": [{"time": 2}, {"time": 1}]}]})").find("later"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj", "keyframes": [{"time": 1, "scale": 0}]}]})").find("scale"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj", "morph": [{"time": 1}]}]})").find("required"), std::string::npos);
+  EXPECT_NE(error_of(R"({"targets": [{"mesh": "a.obj", "interpolation": "cubic"}]})").find("linear, smooth"),
+            std::string::npos);
+  // Neither fluid nor targets: nothing to simulate.
+  EXPECT_NE(error_of(R"({"output": {"frames": 3}})").find("no fluid"), std::string::npos);
+}
+
 TEST(Scene, HashIgnoresFrameCountButNotPhysics) {
   auto a = parse(kMinimal), b = parse(std::string(R"({"output":{"frames":7},)") + std::string(kMinimal).substr(1));
   auto c = parse(std::string(R"({"solver":{"iterations":5},)") + std::string(kMinimal).substr(1));
