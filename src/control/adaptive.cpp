@@ -110,7 +110,8 @@ void AdaptiveController::flatten() {
 std::size_t AdaptiveController::scratch_bytes() const {
   auto vb = [](const auto& v) { return v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
   return cf_.bytes() + fc_.bytes() + fluid_grid_.bytes() + ctrl_grid_.bytes() + vb(xc_) + vb(rho_c_) + vb(phi_) + vb(tc_) +
-         vb(rho_p_) + vb(fill_) + vb(hstar2_) + vb(lambda_) + vb(bond_off_) + vb(bond_idx_) + vb(seeds_);
+         vb(rho_p_) + vb(fill_) + vb(hstar2_) + vb(lambda_) + vb(bond_off_) + vb(bond_idx_) + vb(seeds_) + vb(grad_c_) +
+         vb(rest_x_) + vb(rest_grad_) + vb(active_) + vb(dx_) + vb(touched_) + vb(coef_);
 }
 
 // Samples of keyframed targets follow their pose; densities keep their rest values (rigid motion keeps
@@ -241,13 +242,13 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
       if (s2 > vmax * vmax) a[j] += (vs * (vmax / std::sqrt(s2)) - vs) / dt;
     });
   }
-  if (params_.gather) gather(view, p);
+  if (params_.gather) gather(p);
 }
 
 // Gather (ours, METHOD §a.10): an unbonded particle whose target still has under-filled samples is steered
 // toward the nearest of them, at a limited speed, with gravity cancelled so it can rise into a target
 // above it. It stops as soon as the particle is bonded (the control takes over) or the target is full.
-void AdaptiveController::gather(const sim::StepView& view, sim::ParticleSet& p) {
+void AdaptiveController::gather(sim::ParticleSet& p) {
   const std::size_t n = p.size(), m = xc_.size();
   // Which targets have unbonded fluid at all (once formed, none: the field is not worth computing).
   std::vector<char> wanted(seed_field_.size(), 0);
@@ -266,7 +267,6 @@ void AdaptiveController::gather(const sim::StepView& view, sim::ParticleSet& p) 
   const Vec3f* v = p.velocity.data();
   Vec3f* a = p.acceleration.data();
   const std::uint8_t* tf = p.target.data();
-  (void)view;
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     const std::uint8_t t = tf[j];

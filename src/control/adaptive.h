@@ -61,7 +61,7 @@ class AdaptiveController final : public sim::Controller {
   bool active(std::uint8_t t, double time) const { return t < start_.size() && time >= start_[t]; }
   void adaptive_spring(sim::ParticleSet& p, float dt) const;
   void control_correction(sim::ParticleSet& p, float dt);
-  void gather(const sim::StepView& view, sim::ParticleSet& p);
+  void gather(sim::ParticleSet& p);
 
   ControlContext ctx_;
   AdaptiveParams params_;
