@@ -16,20 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-
-def read_ply(path):
-    with open(path, "rb") as f:
-        props, n = [], 0
-        while True:
-            line = f.readline().decode("ascii").strip()
-            if line.startswith("element vertex"):
-                n = int(line.split()[2])
-            elif line.startswith("property"):
-                _, t, name = line.split()
-                props.append((name, "<f4" if t in ("float", "float32") else "u1"))
-            elif line == "end_header":
-                break
-        return np.frombuffer(f.read(), dtype=np.dtype(props), count=n)
+from render_controls import read_ply  # noqa: E402  (the same PLY reader, next to this script)
 
 
 def main():

@@ -30,6 +30,7 @@ Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene) {
     g.area = field->area();
     g.box = field->bounds();
     g.mesh = std::move(*mesh);
+    g.field = std::move(*field);
     out.push_back(std::move(g));
   }
   return out;
@@ -56,10 +57,8 @@ Status complete_scene(io::Scene& s, std::vector<TargetGeometry>& targets) {
     volume = 0.0;
     for (auto& t : targets) {
       if (!(t.volume > 0.0)) continue;
-      auto field = sampling::MeshField::build(t.mesh);
-      if (!field) return field.error();
       std::size_t kept = 0;
-      for (const Vec3f& x : sampling::voxel_samples(*field, dc)) {
+      for (const Vec3f& x : sampling::voxel_samples(*t.field, dc)) {
         bool dropped = false;
         for (const auto& b : s.sampling.sparse.drop_boxes)
           dropped = dropped || ((x.array() >= b.min.array()).all() && (x.array() <= b.max.array()).all());

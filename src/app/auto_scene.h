@@ -10,8 +10,10 @@
 #include "core/error.h"
 #include "io/scene.h"
 #include "io/triangle_mesh.h"
+#include "sampling/mesh_field.h"
 #include "sim/particle_set.h"
 
+#include <optional>
 #include <vector>
 
 namespace ff::app {
@@ -19,6 +21,7 @@ namespace ff::app {
 /// A target mesh in its scene pose, with what the layout needs.
 struct TargetGeometry {
   io::TriangleMesh mesh;
+  std::optional<sampling::MeshField> field;  ///< inside/outside of `mesh` (built once, for the layout)
   double volume = 0.0;  ///< m³ (0 for an open sheet)
   double area = 0.0;    ///< m²
   Aabb box;

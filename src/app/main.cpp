@@ -43,8 +43,6 @@ fs::path default_scene() {
   return fs::path(FF_SOURCE_DIR) / "examples" / "default_scene.json";
 }
 
-bool quiet_summary(const ff::app::RunOptions&) { return spdlog::get_level() > spdlog::level::info; }
-
 int cmd_run(const fs::path& scene_file, const ff::app::RunOptions& opt) {
   auto scene = ff::io::load_scene(scene_file);
   if (!scene) return fail(scene.error());
@@ -55,7 +53,7 @@ int cmd_run(const fs::path& scene_file, const ff::app::RunOptions& opt) {
   spdlog::info("done: {} particles, {} frames, {:.2f} ms per frame (simulation only), peak memory {:.0f} MiB -> {}",
                sum->particles, sum->frames_written, 1e3 * sum->mean_frame_seconds, sum->peak_memory_mib,
                opt.out_dir.string());
-  if (sum->has_targets && !quiet_summary(opt)) {
+  if (sum->has_targets && spdlog::get_level() <= spdlog::level::info) {  // -q: no summary
     // The one-screen summary (issue 4): the paper's Table 3 columns and the numbers that keep E honest.
     fmt::print(stdout,
                "\n  controller           {}\n"

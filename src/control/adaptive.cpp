@@ -107,13 +107,6 @@ void AdaptiveController::flatten() {
   fill_.assign(xc_.size(), 0.0f);
 }
 
-std::size_t AdaptiveController::scratch_bytes() const {
-  auto vb = [](const auto& v) { return v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
-  return cf_.bytes() + fc_.bytes() + fluid_grid_.bytes() + ctrl_grid_.bytes() + vb(xc_) + vb(rho_c_) + vb(phi_) + vb(tc_) +
-         vb(rho_p_) + vb(fill_) + vb(hstar2_) + vb(lambda_) + vb(bond_off_) + vb(bond_idx_) + vb(seeds_) + vb(grad_c_) +
-         vb(rest_x_) + vb(rest_grad_) + vb(active_) + vb(dx_) + vb(touched_) + vb(coef_);
-}
-
 // Samples of keyframed targets follow their pose; densities keep their rest values (rigid motion keeps
 // them exactly; a scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow).
 void AdaptiveController::move_targets(double time) {
@@ -145,7 +138,6 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   fluid_grid_.build(p.position);
   fluid_grid_.query(p.position, xc_, hc_, cf_);
   ctrl_grid_.query(xc_, p.position, hc_, fc_);
-  rho_p_.resize(m);
   fill_.resize(m);
   hstar2_.resize(m);
   lambda_.assign(m, 0.0f);
@@ -161,8 +153,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       for (Index j : cf_.of(i))
         if (tf[j] == t) rho += poly6_.w_r2((xi - x[j]).squaredNorm());
     }
-    rho_p_[i] = mp * rho;
-    const float f = rho_p_[i] / rho_c_[i];
+    const float f = mp * rho / rho_c_[i];
     fill_[i] = f;
     float scale = 1.0f;
     if (params_.bond_breaking) {

@@ -45,17 +45,6 @@ class AdaptiveController final : public sim::Controller {
   void add_accelerations(const sim::StepView& view, sim::ParticleSet& p) override;
   void correct_positions(const sim::StepView& view, sim::ParticleSet& p) override;
 
-  // Read-outs for metrics, tests and the viewer (valid after a step).
-  std::size_t control_count() const { return xc_.size(); }
-  std::span<const float> fill() const { return fill_; }          ///< ρ_p/ρ_c per sample at the start of the last sub-step
-  std::span<const Vec3f> control_positions() const { return xc_; }
-  std::span<const std::uint8_t> control_target() const { return tc_; }
-  float support() const { return hc_; }
-  float epsilon() const { return eps_c_; }
-  float g_ref() const { return g_ref_; }
-  std::size_t bond_count() const { return bond_idx_.size(); }
-  std::size_t scratch_bytes() const;
-
  private:
   AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc);
   bool active(std::uint8_t t, double time) const { return t < start_.size() && time >= start_[t]; }
@@ -96,7 +85,7 @@ class AdaptiveController final : public sim::Controller {
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
   core::NeighborList fc_;           // fluid j → samples within H_c
-  std::vector<float> rho_p_, fill_, hstar2_, lambda_;
+  std::vector<float> fill_, hstar2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; H_c*²; λ
   std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples
   std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
   std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)
