@@ -12,9 +12,19 @@
 
 namespace ff::control {
 using core::parallel_for;
+namespace {
+
+// Lanes of four fluid particles that belong to target t: pairs of another target are masked off (tested only in a
+// multi-target scene; one target needs no test).
+inline __m128 same_target(const std::uint8_t* tf, const Index* j, std::uint8_t t) {
+  return _mm_castsi128_ps(
+      _mm_setr_epi32(tf[j[0]] == t ? -1 : 0, tf[j[1]] == t ? -1 : 0, tf[j[2]] == t ? -1 : 0, tf[j[3]] == t ? -1 : 0));
+}
+
+}  // namespace
 
 AdaptiveController::AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc)
-    : ctx_(ctx), params_(params), hc_(hc), d_(ctx.spacing()), poly6_(hc), spiky_(hc), ctrl_grid_(hc), fluid_grid_(hc) {}
+    : ctx_(ctx), params_(params), hc_(hc), d_(ctx.spacing()), poly6_(hc), spiky_(hc), fluid_grid_(hc) {}
 
 Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vector<ControlTarget> targets,
                                                                         const ControlContext& ctx,
@@ -74,21 +84,37 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
 // The samples of every target's current phase, flattened into the SoA arrays the loops use, with the
 // per-sample boundary normals and g_ref (eq. 15–16). Run at the start and whenever a target swaps its mesh.
 void AdaptiveController::flatten() {
-  xc_.clear(), rho_c_.clear(), phi_.clear(), tc_.clear(), mass_c_.clear();
+  xc_.clear(), rho_c_.clear(), phi_.clear(), tc_.clear(), mass_c_.clear(), orig_.clear();
+  std::vector<std::pair<std::int64_t, Index>> order;
   for (std::size_t t = 0; t < phases_.size(); ++t) {
     const auto& s = phases_[t][current_[t]].set;
     mass_c_.push_back(s.mass);
     for (std::size_t i = 0; i < s.size(); ++i) {
+      // Key: the sample's cell in the global lattice of edge H_c, z-major like NeighborGrid's keys. Sorted by
+      // it, consecutive samples share their fluid-grid cell (the grids snap to the same lattice), so the
+      // control–fluid query gathers each cell's candidates once, and pair loops walk fluid memory in order.
+      const Vec3f c = (s.position[i] / hc_).array().floor();
+      const auto k = [&](int a) { return static_cast<std::int64_t>(std::clamp(c[a], -1e6f, 1e6f)) + 1'000'000; };
+      order.emplace_back((k(2) * 2'000'001 + k(1)) * 2'000'001 + k(0), static_cast<Index>(xc_.size()));
       xc_.push_back(s.position[i]);
       rho_c_.push_back(s.density[i]);
       phi_.push_back(params_.weights ? s.phi[i] : 1.0f);
       tc_.push_back(static_cast<std::uint8_t>(t));
     }
   }
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  auto permute = [&](auto& v) {
+    auto old = v;
+    for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k].second];
+  };
+  permute(xc_), permute(rho_c_), permute(phi_), permute(tc_);
+  orig_.resize(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) orig_[k] = order[k].second;
   // g_ref: the largest control-density gradient, which is found at the target surface (eq. 15 threshold).
-  ctrl_grid_.build(xc_);
+  core::NeighborGrid grid(hc_);
+  grid.build(xc_);
   core::NeighborList self;
-  ctrl_grid_.query(xc_, xc_, hc_, self);
+  grid.query(xc_, xc_, hc_, self);
   const auto m = static_cast<std::int64_t>(xc_.size());
   grad_c_.resize(xc_.size());
   g_ref_ = static_cast<float>(core::deterministic_max(m, 0.0, [&](std::int64_t ii) {
@@ -119,7 +145,6 @@ void AdaptiveController::move_targets(double time) {
     xc_[i] = pose[t].apply(rest_x_[i]);
     grad_c_[i] = pose[t].rotation * rest_grad_[i];
   });
-  ctrl_grid_.build(xc_);
 }
 
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
@@ -134,24 +159,46 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   const std::size_t n = p.size(), m = xc_.size();
   const Vec3f* x = p.position.data();
   const std::uint8_t* tf = p.target.data();
-  // Pairs within H_c in both directions, on the positions at the start of the sub-step.
+  // Control–fluid pairs within H_c, one query per sub-step on the positions at its start (samples → fluid); the
+  // fluid → sample bonds are its transpose, built below.
   fluid_grid_.build(p.position);
   fluid_grid_.query(p.position, xc_, hc_, cf_);
-  ctrl_grid_.query(xc_, p.position, hc_, fc_);
+  nearest_.resize(n);
   fill_.resize(m);
   hstar2_.resize(m);
   lambda_.assign(m, 0.0f);
 
   // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
+  using namespace core::simd;
   const float mp = ctx_.particle_mass, hc2 = hc_ * hc_;
+  const bool multi = mass_c_.size() > 1;
+  const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
+  // Groups of four pairs per sample: where each sample's bond masks start.
+  grp_base_.resize(m + 1);
+  grp_base_[0] = 0;
+  for (std::size_t i = 0; i < m; ++i) grp_base_[i + 1] = grp_base_[i] + static_cast<Index>((cf_.of(i).size() + 3) / 4);
+  bond_mask_.resize(grp_base_[m]);
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     float rho = 0.0f;
-    if (active(tc_[i], time_)) {
+    const std::uint8_t t = tc_[i];
+    std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+    if (!active(t, time_)) {
+      std::fill(mask, mask + (grp_base_[i + 1] - grp_base_[i]), std::uint8_t(0));
+    } else {
       const Vec3f xi = xc_[i];
-      const std::uint8_t t = tc_[i];
-      for (Index j : cf_.of(i))
-        if (tf[j] == t) rho += poly6_.w_r2((xi - x[j]).squaredNorm());
+      const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+      __m128 sw = zero;
+      core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
+        const V3 xj = core::simd::gather(x, j[0], j[1], j[2], j[3]);
+        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+        const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+        __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
+        if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
+        const __m128 q2 = _mm_sub_ps(h2, r2);
+        sw = _mm_add_ps(sw, select(use, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+      });
+      rho = poly6_.k * hsum(sw);
     }
     const float f = mp * rho / rho_c_[i];
     fill_[i] = f;
@@ -159,41 +206,115 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     if (params_.bond_breaking) {
       scale = params_.bond_radius == BondRadius::Paper ? 1.0f / (1.0f + f) : std::min(1.0f, 2.0f / (1.0f + f));
     }
-    hstar2_[i] = hc2 * scale * scale;
+    const float hs2 = hc2 * scale * scale;
+    hstar2_[i] = hs2;
+    // Bond masks, one bit per pair: r ≤ H_c*,i (and the same target). The pairs are still in L1 from the sum.
+    if (!active(t, time_)) return;
+    const Vec3f xi = xc_[i];
+    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z()), hs = broadcast(hs2);
+    std::size_t g = 0;
+    core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
+      const V3 xj = core::simd::gather(x, j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      __m128 use = _mm_and_ps(lanes, _mm_cmple_ps(r2, hs));
+      if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
+      mask[g++] = static_cast<std::uint8_t>(_mm_movemask_ps(use));
+    });
   });
+  build_bonds(p);
+}
 
-  // Bonds B(j), CSR: count, prefix, fill. A fluid particle is controlled iff it has a bond (METHOD §a.5).
-  bond_off_.assign(n + 1, 0);
-  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
-    const auto j = static_cast<std::size_t>(jj);
-    Index c = 0;
-    const std::uint8_t t = tf[j];
-    if (active(t, time_))
-      for (Index i : fc_.of(j))
-        if (tc_[i] == t && (xc_[i] - x[j]).squaredNorm() <= hstar2_[i]) ++c;
-    bond_off_[j + 1] = c;
-  });
-  for (std::size_t j = 0; j < n; ++j) bond_off_[j + 1] += bond_off_[j];
-  bond_idx_.resize(bond_off_[n]);
+// Bonds B(j), CSR over the fluid, as the transpose of the sample → fluid pairs with |x_ci − x_j| ≤ H_c*,i: a
+// counting sort in which thread t counts and then places the bonds of its contiguous range of samples. Within a
+// particle, bonds are in ascending sample order for any thread count (thread ranges are ordered), so the result
+// is thread-count invariant. A fluid particle is controlled iff it has a bond (METHOD §a.5).
+void AdaptiveController::build_bonds(sim::ParticleSet& p) {
+  const std::size_t n = p.size(), m = xc_.size();
+  const Vec3f* x = p.position.data();
+  const int T = static_cast<std::int64_t>(m) < core::kMinParallel ? 1 : core::thread_count();
+  const auto range = [&](int t, std::size_t& b, std::size_t& e) {
+    const std::size_t chunk = (m + static_cast<std::size_t>(T) - 1) / static_cast<std::size_t>(T);
+    b = std::min(m, chunk * static_cast<std::size_t>(t));
+    e = std::min(m, b + chunk);
+  };
+  // Calls f(i, j) for every bond of the samples of thread t, from the masks of the fill pass.
+  const auto bonds_of = [&](int t, auto&& f) {
+    std::size_t b, e;
+    range(t, b, e);
+    for (std::size_t i = b; i < e; ++i) {
+      const core::NeighborRange r = cf_.of(i);
+      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+      const std::size_t groups = grp_base_[i + 1] - grp_base_[i];
+      for (std::size_t g = 0; g < groups; ++g)
+        for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(static_cast<Index>(i), r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
+    }
+  };
+  const std::size_t tn = static_cast<std::size_t>(T) * n;
+  cursor_.assign(tn, 0);
+#pragma omp parallel num_threads(T)
+  {
+    const int t = omp_get_thread_num();
+    Index* count = cursor_.data() + static_cast<std::size_t>(t) * n;
+    bonds_of(t, [&](Index, Index j) { ++count[j]; });
+  }
+  bond_off_.resize(n + 1);
+  Index run = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    bond_off_[j] = run;
+    for (int t = 0; t < T; ++t) {
+      Index& c = cursor_[static_cast<std::size_t>(t) * n + j];
+      const Index k = c;
+      c = run;
+      run += k;
+    }
+  }
+  bond_off_[n] = run;
+  bond_idx_.resize(run);
+#pragma omp parallel num_threads(T)
+  {
+    Index* cursor = cursor_.data() + static_cast<std::size_t>(omp_get_thread_num()) * n;
+    bonds_of(omp_get_thread_num(), [&](Index i, Index j) { bond_idx_[cursor[j]++] = i; });
+  }
+
+  // The nearest bonded sample of each particle (ties: the lower sample index), four bonds at a time.
+  using namespace core::simd;
   Index* bound = p.bound_control.data();
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
-    Index o = bond_off_[j], nearest = kInvalidIndex;
-    if (o == bond_off_[j + 1]) {
-      bound[j] = kInvalidIndex;
+    const Index b = bond_off_[j], e = bond_off_[j + 1];
+    if (b == e) {
+      nearest_[j] = bound[j] = kInvalidIndex;
       return;
     }
-    const std::uint8_t t = tf[j];
-    float best = INFINITY;
-    for (Index i : fc_.of(j)) {
-      if (tc_[i] != t) continue;
-      const float r2 = (xc_[i] - x[j]).squaredNorm();
-      if (r2 <= hstar2_[i]) {
-        bond_idx_[o++] = i;
-        if (r2 < best) best = r2, nearest = i;
-      }
+    const Vec3f xj = x[j];
+    const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
+    __m128 best = broadcast(INFINITY);
+    __m128i best_i = _mm_set1_epi32(-1);
+    for (Index k = b; k < e; k += 4) {
+      const Index left = e - k;
+      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
+                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
+      const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      // Bonds ascend, so a strict < keeps the lower index of a tie within a lane.
+      const __m128 better = _mm_cmplt_ps(r2, best);
+      best = _mm_blendv_ps(best, r2, better);
+      best_i = _mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(best_i),
+                                              _mm_castsi128_ps(_mm_setr_epi32(static_cast<int>(i0), static_cast<int>(i1),
+                                                                              static_cast<int>(i2), static_cast<int>(i3))),
+                                              better));
     }
-    bound[j] = nearest;
+    alignas(16) float r2s[4];
+    alignas(16) Index is[4];
+    _mm_store_ps(r2s, best);
+    _mm_store_si128(reinterpret_cast<__m128i*>(is), best_i);
+    std::size_t l = 0;
+    for (std::size_t k = 1; k < 4; ++k)
+      if (r2s[k] < r2s[l] || (r2s[k] == r2s[l] && is[k] < is[l])) l = k;
+    nearest_[j] = is[l];
+    bound[j] = orig_[is[l]];
   });
 }
 
@@ -208,10 +329,9 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
   // the sum cost as much as the whole control correction.
   if (params_.boundary_correction) {
     const float thr = params_.normal_threshold * g_ref_;
-    const Index* bound = p.bound_control.data();
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
       const auto j = static_cast<std::size_t>(jj);
-      const Index i = bound[j];
+      const Index i = nearest_[j];
       if (i == kInvalidIndex) return;
       const Vec3f nrm = grad_c_[i];
       const float len = nrm.norm();
@@ -275,30 +395,42 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
 // Eq. 17–18 as METHOD §a.5: a soft spring toward the bonded samples, stiffness f_i(r) = 1/(1 + (ρ_p/ρ_c) r/H_c),
 // kernel-averaged so symmetric surroundings pull ~nothing. Once per sub-step.
 void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
+  using namespace core::simd;
   const std::size_t n = p.size();
   Vec3f* xs = p.predicted.data();
-  const float gamma = params_.gamma * std::min(1.0f, dt / kReferenceDt), inv_hc = 1.0f / hc_;
+  const float gamma = params_.gamma * std::min(1.0f, dt / kReferenceDt);
   Vec3f* shift = p.shift.data();
   const bool kinematic = params_.kinematic;
+  const __m128 h2 = broadcast(poly6_.h2), inv_hc = broadcast(1.0f / hc_), one = broadcast(1.0f), zero = _mm_setzero_ps();
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     const Index b = bond_off_[j], e = bond_off_[j + 1];
     if (b == e) return;
     const Vec3f xj = xs[j];
-    Vec3f num = Vec3f::Zero();
-    float den = 0.0f;
-    for (Index k = b; k < e; ++k) {
-      const Index i = bond_idx_[k];
-      const Vec3f r = xc_[i] - xj;
-      const float r2 = r.squaredNorm();
-      const float w = poly6_.w_r2(r2);
-      if (w <= 0.0f) continue;
-      const float f = 1.0f / (1.0f + fill_[i] * std::sqrt(r2) * inv_hc);
-      num += (w * f) * r;
-      den += w;
+    const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
+    __m128 nx = zero, ny = zero, nz = zero, den = zero;
+    // Four bonds at a time: Σ w f r and Σ w with w the Poly6 weight (its constant cancels in the ratio).
+    for (Index k = b; k < e; k += 4) {
+      const Index left = e - k;
+      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
+                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
+      const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
+      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 q2 = _mm_sub_ps(h2, r2);
+      const __m128 w = select(_mm_and_ps(_mm_cmplt_ps(r2, h2), core::simd::first_lanes(left)),
+                              _mm_mul_ps(_mm_mul_ps(q2, q2), q2));
+      const __m128 fill = core::simd::gather(fill_.data(), i0, i1, i2, i3);
+      const __m128 f = _mm_div_ps(one, _mm_add_ps(one, _mm_mul_ps(fill, _mm_mul_ps(_mm_sqrt_ps(r2), inv_hc))));
+      const __m128 wf = _mm_mul_ps(w, f);
+      nx = _mm_add_ps(nx, _mm_mul_ps(wf, rx));
+      ny = _mm_add_ps(ny, _mm_mul_ps(wf, ry));
+      nz = _mm_add_ps(nz, _mm_mul_ps(wf, rz));
+      den = _mm_add_ps(den, w);
     }
-    if (den > 0.0f) {
-      const Vec3f dx = (gamma / den) * num;
+    const float d = hsum(den);
+    if (d > 0.0f) {
+      const Vec3f dx = (gamma / d) * Vec3f(hsum(nx), hsum(ny), hsum(nz));
       xs[j] = xj + dx;
       if (kinematic) shift[j] += dx;
     }
@@ -316,11 +448,6 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   const float mp = ctx_.particle_mass, eps = eps_c_;
   const bool multi = mass_c_.size() > 1;
   const __m128 h = broadcast(spiky_.h), h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
-  // Pairs of another target are masked off (only in a multi-target scene: one target needs no test).
-  auto same_target = [&](const Index* j, std::uint8_t t) {
-    return _mm_castsi128_ps(_mm_setr_epi32(tf[j[0]] == t ? -1 : 0, tf[j[1]] == t ? -1 : 0, tf[j[2]] == t ? -1 : 0,
-                                           tf[j[3]] == t ? -1 : 0));
-  };
   // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked).
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
@@ -340,7 +467,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
       const __m128 r2 = r2_of(j);
       __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
-      if (multi) use = _mm_and_ps(use, same_target(j, t));
+      if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       const __m128 q2 = _mm_sub_ps(h2, r2);
       sw = _mm_add_ps(sw, select(use, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
     });
@@ -350,7 +477,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
       const __m128 r2 = r2_of(j);
       __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
-      if (multi) use = _mm_and_ps(use, same_target(j, t));
+      if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       const __m128 q = _mm_sub_ps(h, _mm_sqrt_ps(r2));
       const __m128 q2 = _mm_mul_ps(q, q);
       g2 = _mm_add_ps(g2, select(use, _mm_mul_ps(q2, q2)));  // |∇W|² = kgrad² (h − r)⁴

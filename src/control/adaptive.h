@@ -51,6 +51,7 @@ class AdaptiveController final : public sim::Controller {
   void adaptive_spring(sim::ParticleSet& p, float dt) const;
   void control_correction(sim::ParticleSet& p, float dt);
   void gather(sim::ParticleSet& p);
+  void build_bonds(sim::ParticleSet& p);
 
   ControlContext ctx_;
   AdaptiveParams params_;
@@ -66,6 +67,8 @@ class AdaptiveController final : public sim::Controller {
   std::vector<Vec3f> xc_;
   std::vector<float> rho_c_, phi_;  // ρ_c,i; φ̃_i (1 when weights are off)
   std::vector<std::uint8_t> tc_;    // target of each sample
+  std::vector<Index> orig_;         // sample's index in the targets' concatenated sets (samples are kept sorted
+                                    // by cell for locality; bound_control reports this index)
   std::vector<Vec3f> grad_c_;       // n at each sample: −Σ_j m_c ∇W(x_ci − x_cj), outward (eq. 16)
   std::vector<Vec3f> rest_x_, rest_grad_;  // rest pose of xc_ and grad_c_ (moving targets only)
   std::vector<TargetMotion> motion_;       // per target
@@ -78,15 +81,17 @@ class AdaptiveController final : public sim::Controller {
   };
   std::vector<std::vector<Phase>> phases_;  // per target: its sample sets in time order
   std::vector<std::size_t> current_;        // per target: the phase in use
-  core::NeighborGrid ctrl_grid_;    // over xc_ (static)
 
   // Per sub-step.
   double time_ = 0.0;
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
-  core::NeighborList fc_;           // fluid j → samples within H_c
   std::vector<float> fill_, hstar2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; H_c*²; λ
-  std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples
+  std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples (ascending)
+  std::vector<Index> nearest_;              // fluid j → its nearest bonded sample (kInvalidIndex: none)
+  std::vector<Index> cursor_;               // per thread × fluid: bond counts, then write cursors
+  std::vector<Index> grp_base_;             // per sample: first group of four pairs in bond_mask_
+  std::vector<std::uint8_t> bond_mask_;     // per group of four sample → fluid pairs: which are bonds
   std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
   std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)
   std::vector<std::uint8_t> touched_;

@@ -172,7 +172,10 @@ void NeighborGrid::build(std::span<const Vec3f> points) {
   if (box.empty()) box.extend(Vec3f::Zero());
   // Two cells of margin below: every finite point's cell then has x−1, y−1, z−1 neighbours even after
   // rounding, and one above (floor(ext) ≤ dims − 2), so compact rows never leave the key space.
-  origin_ = box.min - Vec3f::Constant(2.0f * radius_);
+  // The origin is snapped to the global lattice of cell edges (multiples of the radius), so two grids of one
+  // radius have the same cells: a caller can sort its query points by that lattice (AdaptiveController does)
+  // and consecutive queries then share their 27 candidate cells.
+  origin_ = ((box.min / radius_).array().floor() - 2.0f).matrix() * radius_;
   const Vec3f ext = (box.max - origin_) / radius_;
   const double cells = (std::floor(double(ext.x())) + 2) * (std::floor(double(ext.y())) + 2) * (std::floor(double(ext.z())) + 2);
   // Dense keys while the box has at most ~2 cells per point: the cell table stays O(N).
