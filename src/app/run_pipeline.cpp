@@ -395,6 +395,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
                controller->name(), core::thread_count());
 
   const double frame_dt = 1.0 / scene.output.fps;
+  sim::StageTimes stages;  // summed over the frames this process simulated (not those before a --resume)
   auto totals = [&]() {
     double peak = 0.0;
     for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
@@ -407,7 +408,9 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
               {"peak_memory_mb", peak},
               {"threads", core::thread_count()},
               {"rest_density", solver.rest_density()},
-              {"particle_mass", solver.particle_mass()}};
+              {"particle_mass", solver.particle_mass()},
+              {"stage_seconds", {{"neighbors", stages.neighbors}, {"forces", stages.forces}, {"control", stages.control},
+                                 {"solve", stages.solve}, {"update", stages.update}}}};
     if (!shapes.empty() && !rows.empty()) {
       std::vector<double> e, times;
       for (const auto& r : rows) e.push_back(r.error_rate), times.push_back(r.time);
@@ -493,6 +496,8 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     FrameRow row{f, time, particles.size(), seconds, stats->substeps, stats->times.iterations, stats->density_error_mean,
                  stats->density_error_max, core::peak_rss_mib()};
     row.control_seconds = stats->times.control;
+    stages.neighbors += stats->times.neighbors, stages.forces += stats->times.forces, stages.solve += stats->times.solve;
+    stages.control += stats->times.control, stages.update += stats->times.update;
     measure_frame(shapes, motions, time, particles, scene.solver.particle_radius, f, flags, row, target_rows);
     rows.push_back(row);
     last_frame = f;
