@@ -1,0 +1,58 @@
+// Checks a GLB the way its users will open it: the Khronos glTF validator (npm gltf-validator) and three.js's
+// GLTFLoader (the loader of the WebXR viewer). Prints one JSON line:
+//   {"errors", "warnings", "messages": [first issues], "three": {"meshes", "nodes", "clips", "duration",
+//    "vertices_last", "box_last": [min, max] of the last frame's world-space positions}}
+// and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
+import fs from 'node:fs';
+import validator from 'gltf-validator';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+
+const file = process.argv[2];
+if (!file) {
+  console.error('usage: node scripts/check_glb.mjs FILE.glb');
+  process.exit(2);
+}
+const bytes = new Uint8Array(fs.readFileSync(file));
+const report = await validator.validateBytes(bytes, { maxIssues: 200 });
+const out = {
+  errors: report.issues.numErrors,
+  warnings: report.issues.numWarnings,
+  messages: report.issues.messages.slice(0, 10).map((m) => `${m.code} ${m.pointer ?? ''}: ${m.message}`),
+};
+
+const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+try {
+  const gltf = await new GLTFLoader().parseAsync(buffer, '');
+  const meshes = [];
+  let nodes = 0;
+  gltf.scene.traverse((o) => {
+    nodes += 1;
+    if (o.isMesh) meshes.push(o);
+  });
+  // Play the animation to just before its end (the last frame's interval): only the last frame's mesh is then
+  // visible (world scale 1).
+  const mixer = new THREE.AnimationMixer(gltf.scene);
+  const clip = gltf.animations[0];
+  if (clip) {
+    mixer.clipAction(clip).play();
+    mixer.setTime(clip.duration * (1 - 1e-3));
+  }
+  gltf.scene.updateMatrixWorld(true);
+  const visible = meshes.filter((m) => Math.abs(m.matrixWorld.determinant()) > 0);
+  const last = visible.length ? visible[visible.length - 1] : null;
+  const box = last ? new THREE.Box3().setFromObject(last) : null;
+  out.three = {
+    meshes: meshes.length,
+    nodes,
+    clips: gltf.animations.length,
+    duration: clip ? clip.duration : 0,
+    visible_at_end: visible.length,
+    vertices_last: last ? last.geometry.attributes.position.count : 0,
+    box_last: box ? [box.min.toArray(), box.max.toArray()] : null,
+  };
+} catch (e) {
+  out.three = { error: String(e && e.message ? e.message : e) };
+}
+console.log(JSON.stringify(out));
+process.exit(out.three.error ? 1 : 0);

@@ -1,0 +1,297 @@
+#include "io/write_mesh.h"
+
+#include "io/atomic_file.h"
+
+#include <Eigen/Geometry>  // cross product
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace ff::io {
+namespace {
+
+using nlohmann::json;
+
+// glTF enums (WebGL names).
+constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+/// The binary chunk under construction and the JSON arrays that describe it.
+struct GlbBuilder {
+  std::vector<std::uint8_t> bin;
+  json views = json::array(), accessors = json::array();
+
+  /// Appends `bytes` as one buffer view (4-byte aligned); returns its index.
+  int view(const void* data, std::size_t bytes, int target = 0, int stride = 0) {
+    while (bin.size() % 4) bin.push_back(0);
+    json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+    if (target) v["target"] = target;
+    if (stride) v["byteStride"] = stride;
+    const auto* p = static_cast<const std::uint8_t*>(data);
+    bin.insert(bin.end(), p, p + bytes);
+    views.push_back(v);
+    return static_cast<int>(views.size()) - 1;
+  }
+  int accessor(int view, int component, std::size_t count, const char* type, json min = nullptr, json max = nullptr,
+               bool normalized = false) {
+    json a = {{"bufferView", view}, {"componentType", component}, {"count", count}, {"type", type}};
+    if (normalized) a["normalized"] = true;
+    if (!min.is_null()) a["min"] = std::move(min), a["max"] = std::move(max);
+    accessors.push_back(a);
+    return static_cast<int>(accessors.size()) - 1;
+  }
+};
+
+template <class T>
+void put(std::vector<std::uint8_t>& out, T v) {
+  std::uint8_t b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  out.insert(out.end(), b, b + sizeof(T));
+}
+
+// Snorm encodings of glTF 2.0 (KHR_mesh_quantization): value = max(q / (2ⁿ⁻¹ − 1), −1).
+std::int16_t snorm16(float v) { return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)); }
+std::int8_t snorm8(float v) { return static_cast<std::int8_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 127.0f)); }
+
+}  // namespace
+
+std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh) {
+  std::vector<Vec3f> n(mesh.vertices.size(), Vec3f::Zero());
+  for (const auto& t : mesh.triangles) {
+    // The cross product's length is twice the area: summing it weights each face by its area.
+    const Vec3f c = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    for (Index v : t) n[v] += c;
+  }
+  for (auto& v : n) {
+    const float len = v.norm();
+    v = len > 0.0f && std::isfinite(len) ? Vec3f(v / len) : Vec3f(0.0f, 1.0f, 0.0f);
+  }
+  return n;
+}
+
+std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view comment) {
+  std::string s;
+  s.reserve(mesh.vertices.size() * (normals ? 64 : 32) + mesh.triangles.size() * 40);
+  for (std::size_t a = 0, b; a <= comment.size(); a = b + 1) {
+    b = comment.find('\n', a);
+    if (b == std::string_view::npos) b = comment.size();
+    s += fmt::format("# {}\n", comment.substr(a, b - a));
+  }
+  s += fmt::format("# {} vertices, {} triangles; Y up, metres\n", mesh.vertices.size(), mesh.triangles.size());
+  // 9 significant digits round-trip a float exactly.
+  for (const auto& v : mesh.vertices) s += fmt::format("v {:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
+  if (normals)
+    for (const auto& n : vertex_normals(mesh)) s += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", n.x(), n.y(), n.z());
+  for (const auto& t : mesh.triangles) {
+    if (normals)
+      s += fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    else
+      s += fmt::format("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  }
+  return s;
+}
+
+Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals, std::string_view comment) {
+  for (const auto& t : mesh.triangles)
+    for (Index v : t)
+      if (v >= mesh.vertices.size())
+        return input_error(fmt::format("{}: triangle refers to vertex {} of {}", path.string(), v, mesh.vertices.size()));
+  return write_file_atomic(path, encode_obj(mesh, normals, comment));
+}
+
+Status GlbOptions::validate(std::size_t frames) const {
+  if (!(fps > 0.0) || !std::isfinite(fps)) return param_error(fmt::format("glb: fps = {} must be > 0", fps));
+  if (!times.empty()) {
+    if (times.size() != frames)
+      return param_error(fmt::format("glb: {} frame times for {} frames", times.size(), frames));
+    for (std::size_t k = 0; k < times.size(); ++k)
+      if (!std::isfinite(times[k]) || (k && !(times[k] > times[k - 1])))
+        return param_error("glb: frame times must be finite and increasing");
+  }
+  return {};
+}
+
+Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& o) {
+  FF_CHECK(o.validate(frames.size()));
+  if (frames.empty()) return param_error("glb: no frames to write");
+  GlbBuilder b;
+  json nodes = json::array(), meshes = json::array();
+  json root = {{"name", "fluidform"}, {"children", json::array()}};
+  nodes.push_back(root);
+  const auto time_of = [&](std::size_t k) { return o.times.empty() ? double(k) / o.fps : o.times[k]; };
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const TriangleMesh& m = frames[k];
+    for (const auto& t : m.triangles)
+      for (Index v : t)
+        if (v >= m.vertices.size())
+          return input_error(fmt::format("glb: frame {} has a triangle that refers to vertex {} of {}", k, v, m.vertices.size()));
+    json node = {{"name", fmt::format("frame_{:05d}", k)}};
+    // Static pose (no animation playing): the last frame, the formed shape.
+    if (k + 1 != frames.size()) node["scale"] = {0.0, 0.0, 0.0};
+    const int node_index = static_cast<int>(nodes.size());
+    nodes[0]["children"].push_back(node_index);
+    nodes.push_back(node);
+    if (m.triangles.empty()) continue;
+    for (const auto& v : m.vertices)
+      if (!v.allFinite()) return input_error(fmt::format("glb: frame {} has a non-finite vertex", k));
+    const std::size_t nv = m.vertices.size();
+    const std::vector<Vec3f> normals = vertex_normals(m);
+    Aabb box;
+    for (const auto& v : m.vertices) box.extend(v);
+    json attributes;
+    json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
+    if (o.quantize) {
+      // Positions → [−1, 1]³ of the bounding box, dequantized by a child node's translation and scale (so the
+      // frame node's own scale stays free for the visibility animation).
+      const Vec3f c = 0.5f * (box.min + box.max);
+      const Vec3f h = (0.5f * (box.max - box.min)).cwiseMax(Vec3f::Constant(1e-12f));
+      std::vector<std::int16_t> q(4 * nv, 0);  // stride 8: vertex attributes must be 4-byte aligned
+      std::array<int, 3> lo{32767, 32767, 32767}, hi{-32767, -32767, -32767};
+      for (std::size_t i = 0; i < nv; ++i)
+        for (int a = 0; a < 3; ++a) {
+          const std::int16_t v = snorm16((m.vertices[i][a] - c[a]) / h[a]);
+          q[4 * i + static_cast<std::size_t>(a)] = v;
+          lo[static_cast<std::size_t>(a)] = std::min<int>(lo[static_cast<std::size_t>(a)], v);
+          hi[static_cast<std::size_t>(a)] = std::max<int>(hi[static_cast<std::size_t>(a)], v);
+        }
+      const int pv = b.view(q.data(), q.size() * sizeof(std::int16_t), kArrayBuffer, 8);
+      // min/max of a normalized accessor are its stored integers (the validator checks them so).
+      attributes["POSITION"] = b.accessor(pv, kShort, nv, "VEC3", {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, true);
+      std::vector<std::int8_t> qn(4 * nv, 0);
+      for (std::size_t i = 0; i < nv; ++i)
+        for (int a = 0; a < 3; ++a) qn[4 * i + static_cast<std::size_t>(a)] = snorm8(normals[i][a]);
+      const int nview = b.view(qn.data(), qn.size(), kArrayBuffer, 4);
+      attributes["NORMAL"] = b.accessor(nview, kByte, nv, "VEC3", nullptr, nullptr, true);
+      mesh_node = {{"name", fmt::format("frame_{:05d}_mesh", k)}, {"mesh", meshes.size()},
+                   {"translation", {c.x(), c.y(), c.z()}}, {"scale", {h.x(), h.y(), h.z()}}};
+    } else {
+      const int pv = b.view(m.vertices.data(), nv * sizeof(Vec3f), kArrayBuffer);
+      attributes["POSITION"] = b.accessor(pv, kFloat, nv, "VEC3", {box.min.x(), box.min.y(), box.min.z()},
+                                          {box.max.x(), box.max.y(), box.max.z()});
+      const int nview = b.view(normals.data(), nv * sizeof(Vec3f), kArrayBuffer);
+      attributes["NORMAL"] = b.accessor(nview, kFloat, nv, "VEC3");
+    }
+    int indices;
+    if (nv <= 65535) {
+      std::vector<std::uint16_t> idx;
+      idx.reserve(3 * m.triangles.size());
+      for (const auto& t : m.triangles)
+        for (Index v : t) idx.push_back(static_cast<std::uint16_t>(v));
+      indices = b.accessor(b.view(idx.data(), idx.size() * 2, kElementArrayBuffer), kUnsignedShort, idx.size(), "SCALAR");
+    } else {
+      indices = b.accessor(b.view(m.triangles.data(), m.triangles.size() * 12, kElementArrayBuffer), kUnsignedInt,
+                           3 * m.triangles.size(), "SCALAR");
+    }
+    meshes.push_back({{"name", fmt::format("frame_{:05d}", k)},
+                      {"primitives", {{{"attributes", attributes}, {"indices", indices}, {"material", 0}, {"mode", 4}}}}});
+    if (mesh_node.is_null()) {
+      nodes[static_cast<std::size_t>(node_index)]["mesh"] = meshes.size() - 1;
+    } else {
+      nodes[static_cast<std::size_t>(node_index)]["children"] = {nodes.size()};
+      nodes.push_back(mesh_node);
+    }
+  }
+
+  // Visibility: node k is scaled 1 on [t_k, t_{k+1}) and 0 elsewhere, with STEP keys (the first frame from 0, the
+  // last one for 1/fps after its time, which is where the clip ends). One 0→1→0 sampler per frame.
+  json channels = json::array(), samplers = json::array();
+  if (frames.size() > 1) {
+    std::vector<float> t(frames.size());
+    for (std::size_t k = 0; k < frames.size(); ++k) t[k] = static_cast<float>(time_of(k));
+    const float t0 = std::min(0.0f, t[0]);
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      std::vector<float> keys, scales;
+      auto key = [&](float time, float s) {
+        keys.push_back(time);
+        scales.insert(scales.end(), {s, s, s});
+      };
+      if (k == 0) {
+        key(t0, 1.0f);
+        key(t[1], 0.0f);
+      } else {
+        key(t0, 0.0f);
+        key(t[k], 1.0f);
+        // The last frame holds for one frame time, so the clip (and a loop of it) shows it like every other.
+        key(k + 1 < frames.size() ? t[k + 1] : t[k] + static_cast<float>(1.0 / o.fps), k + 1 < frames.size() ? 0.0f : 1.0f);
+      }
+      // An input accessor needs min and max; the keys ascend.
+      const int in = b.accessor(b.view(keys.data(), keys.size() * 4), kFloat, keys.size(), "SCALAR", {keys.front()}, {keys.back()});
+      const int out = b.accessor(b.view(scales.data(), scales.size() * 4), kFloat, keys.size(), "VEC3");
+      samplers.push_back({{"input", in}, {"output", out}, {"interpolation", "STEP"}});
+      channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", nodes[0]["children"][k]}, {"path", "scale"}}}});
+    }
+  }
+
+  while (b.bin.size() % 4) b.bin.push_back(0);
+  json doc = {{"asset", {{"version", "2.0"}, {"generator", "fluidform"}}},
+              {"scene", 0},
+              {"scenes", {{{"name", "fluidform"}, {"nodes", {0}}}}},
+              {"nodes", nodes},
+              {"materials", {{{"name", "fluid"},
+                              {"pbrMetallicRoughness", {{"baseColorFactor", {o.color.x(), o.color.y(), o.color.z(), 1.0}},
+                                                        {"metallicFactor", 0.0},
+                                                        {"roughnessFactor", 0.25}}}}}},
+              {"buffers", {{{"byteLength", b.bin.size()}}}},
+              {"bufferViews", b.views},
+              {"accessors", b.accessors}};
+  if (!meshes.empty()) doc["meshes"] = meshes;
+  if (!channels.empty()) doc["animations"] = {{{"name", "forming"}, {"channels", channels}, {"samplers", samplers}}};
+  if (o.quantize && !meshes.empty()) {
+    doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+    doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  }
+  std::string text = doc.dump();
+  while (text.size() % 4) text.push_back(' ');
+  const std::size_t total = 12 + 8 + text.size() + 8 + b.bin.size();
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    return param_error(fmt::format("glb: {} bytes is more than a GLB can hold (4 GiB); mesh fewer frames", total));
+  std::vector<std::uint8_t> out;
+  out.reserve(total);
+  put<std::uint32_t>(out, 0x46546C67u);  // "glTF"
+  put<std::uint32_t>(out, 2);
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(total));
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(text.size()));
+  put<std::uint32_t>(out, 0x4E4F534Au);  // "JSON"
+  out.insert(out.end(), text.begin(), text.end());
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(b.bin.size()));
+  put<std::uint32_t>(out, 0x004E4942u);  // "BIN\0"
+  out.insert(out.end(), b.bin.begin(), b.bin.end());
+  return out;
+}
+
+Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh> frames, const GlbOptions& options) {
+  auto bytes = encode_glb(frames, options);
+  if (!bytes) return bytes.error();
+  return write_file_atomic(path, *bytes);
+}
+
+Status write_pc2(const std::filesystem::path& path, std::span<const std::vector<Vec3f>> frames, float start_frame) {
+  if (frames.empty()) return param_error(fmt::format("{}: a point cache needs at least one frame", path.string()));
+  if (!std::isfinite(start_frame)) return param_error(fmt::format("{}: start frame must be finite", path.string()));
+  const std::size_t n = frames.front().size();
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    if (frames[k].size() != n)
+      return param_error(fmt::format("{}: frame {} has {} points, frame 0 has {}", path.string(), k, frames[k].size(), n));
+  if (n > std::numeric_limits<std::int32_t>::max() || frames.size() > std::numeric_limits<std::int32_t>::max())
+    return param_error(fmt::format("{}: too many points or frames for PC2", path.string()));
+  // PC2: "POINTCACHE2\0", int32 version 1, int32 points, float start frame, float sample rate (frames per
+  // sample), int32 samples; then samples × points × float[3], little-endian.
+  std::vector<std::uint8_t> out;
+  out.reserve(32 + frames.size() * n * 12);
+  const char magic[12] = "POINTCACHE2";
+  out.insert(out.end(), magic, magic + 12);
+  put<std::int32_t>(out, 1);
+  put<std::int32_t>(out, static_cast<std::int32_t>(n));
+  put<float>(out, start_frame);
+  put<float>(out, 1.0f);  // one sample per frame (Blender plays it at the scene's frame rate)
+  put<std::int32_t>(out, static_cast<std::int32_t>(frames.size()));
+  for (const auto& f : frames)
+    for (const auto& p : f) put<float>(out, p.x()), put<float>(out, p.y()), put<float>(out, p.z());
+  return write_file_atomic(path, out);
+}
+
+}  // namespace ff::io

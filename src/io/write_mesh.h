@@ -1,0 +1,48 @@
+#pragma once
+// Mesh exports (DESIGN.md output contract; issue 6): the editable mesh as Wavefront OBJ, the mesh animation as
+// one glTF 2.0 binary (GLB), and the particles as a Blender point cache (PC2 + a frame-0 point mesh).
+//
+// Axes: fluidform simulates Y-up (gravity along −Y) in metres, which is glTF's convention (+Y up, metres) and
+// what Blender's OBJ and glTF importers expect by default (they turn Y-up into Blender's Z-up), so coordinates
+// are written as they are. Every file is written atomically (temp file + rename).
+#include "core/error.h"
+#include "core/types.h"
+#include "io/triangle_mesh.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace ff::io {
+
+/// Per-vertex unit normals, area-weighted over the incident triangles (a vertex of no triangle gets +Y).
+std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh);
+
+/// OBJ text: `v` lines, then `vn` (vertex normals, same indexing) when `normals`, then `f a//a b//b c//c`.
+std::string encode_obj(const TriangleMesh& mesh, bool normals = true, std::string_view comment = "fluidform mesh");
+Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals = true,
+                 std::string_view comment = "fluidform mesh");
+
+struct GlbOptions {
+  double fps = 60.0;        ///< frames per second of the animation, > 0
+  bool quantize = true;     ///< KHR_mesh_quantization: 16-bit positions, 8-bit normals (about half the size)
+  std::vector<double> times;  ///< optional time (s) of each frame; empty: frame k at k / fps
+  Vec3f color{0.16f, 0.48f, 0.85f};  ///< base colour of the fluid material (linear RGB)
+
+  Status validate(std::size_t frames) const;
+};
+
+/// The mesh animation as one GLB: one node per frame under a root node, switched by a STEP-interpolated scale
+/// animation (frame k has scale 1 from its time until the next frame's, 0 otherwise), so it plays in three.js,
+/// Blender and Unity without plugins. Without the animation (a static viewer) only the last frame shows.
+/// Empty frames get a node without a mesh.
+Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& options);
+Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh> frames, const GlbOptions& options);
+
+/// Blender point cache (PC2, read by the Mesh Cache modifier): `frames[k][i]` is particle i at frame k. Every frame
+/// must have the same number of points (the caller pads by particle id); one sample per frame from `start_frame`.
+Status write_pc2(const std::filesystem::path& path, std::span<const std::vector<Vec3f>> frames, float start_frame = 0.0f);
+
+}  // namespace ff::io

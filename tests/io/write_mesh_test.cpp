@@ -1,0 +1,205 @@
+#include "io/write_mesh.h"
+
+#include "io/load_mesh.h"
+#include "support/shapes.h"
+#include "support/test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+namespace ff::io {
+namespace {
+
+std::vector<std::uint8_t> read_all(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+std::uint32_t u32(const std::vector<std::uint8_t>& b, std::size_t at) {
+  std::uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+
+nlohmann::json glb_json(const std::vector<std::uint8_t>& b) {
+  const std::uint32_t len = u32(b, 12);
+  return nlohmann::json::parse(b.begin() + 20, b.begin() + 20 + len);
+}
+
+// A sequence of frames: a sphere growing and drifting, with an empty frame in the middle.
+std::vector<TriangleMesh> frames() {
+  std::vector<TriangleMesh> f;
+  for (int k = 0; k < 5; ++k) {
+    TriangleMesh m = test::uv_sphere(0.2f + 0.05f * float(k), 16 + 4 * k);
+    for (auto& v : m.vertices) v += Vec3f(0.1f * float(k), 1.0f, -0.3f);
+    f.push_back(k == 2 ? TriangleMesh{} : m);
+  }
+  return f;
+}
+
+TEST(WriteObj, RoundTripsThroughAssimpWithNormals) {
+  const auto dir = test::temp_dir("obj");
+  const TriangleMesh m = test::torus(0.4f, 0.12f, 32, 12);
+  ASSERT_TRUE(write_obj(dir / "t.obj", m).ok());
+  auto back = load_mesh(dir / "t.obj");
+  ASSERT_TRUE(back.has_value()) << back.error().message;
+  ASSERT_EQ(back->triangles.size(), m.triangles.size());
+  // The importer may re-index vertices; compare the triangles' corners.
+  double worst = 0.0;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      worst = std::max<double>(worst, (back->vertices[back->triangles[t][c]] - m.vertices[m.triangles[t][c]]).norm());
+  EXPECT_LT(worst, 1e-6);
+  // Normals point away from the tube's centre line (outward), unit length.
+  const auto n = vertex_normals(m);
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const Vec3f v = m.vertices[i];
+    const Vec3f ring = Vec3f(v.x(), 0.0f, v.z()).normalized() * 0.4f;
+    EXPECT_NEAR(n[i].norm(), 1.0f, 1e-5f);
+    EXPECT_GT(n[i].dot((v - ring).normalized()), 0.95f) << i;
+  }
+}
+
+TEST(WriteObj, RejectsAnOutOfRangeIndexAndLeavesNoFile) {
+  const auto dir = test::temp_dir("obj");
+  TriangleMesh m = test::box(Vec3f(1, 1, 1));
+  m.triangles.push_back({0, 1, 99});
+  const auto s = write_obj(dir / "bad.obj", m);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("vertex 99"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.obj"));
+}
+
+TEST(WriteGlb, LayoutNodesAndStepAnimation) {
+  for (const bool quantize : {false, true}) {
+    GlbOptions o;
+    o.quantize = quantize;
+    const auto f = frames();
+    auto bytes = encode_glb(f, o);
+    ASSERT_TRUE(bytes.has_value()) << bytes.error().message;
+    const auto& b = *bytes;
+    ASSERT_GE(b.size(), 28u);
+    EXPECT_EQ(u32(b, 0), 0x46546C67u);
+    EXPECT_EQ(u32(b, 4), 2u);
+    EXPECT_EQ(u32(b, 8), b.size());
+    EXPECT_EQ(u32(b, 12) % 4, 0u);
+    const auto j = glb_json(b);
+    EXPECT_EQ(j["meshes"].size(), 4u);  // the empty frame has a node but no mesh
+    EXPECT_EQ(j["nodes"][0]["children"].size(), 5u);
+    const auto& anim = j["animations"][0];
+    ASSERT_EQ(anim["channels"].size(), 5u);
+    for (const auto& s : anim["samplers"]) EXPECT_EQ(s["interpolation"], "STEP");
+    // Frame 3's visibility keys: 0 until t = 3/60, 1 until 4/60, then 0.
+    const auto& acc = j["accessors"];
+    const int in = anim["samplers"][3]["input"];
+    EXPECT_EQ(acc[in]["count"], 3);
+    EXPECT_NEAR(acc[in]["max"][0].get<double>(), 4.0 / 60.0, 1e-6);
+    EXPECT_EQ(j.contains("extensionsRequired"), quantize);
+  }
+}
+
+TEST(WriteGlb, QuantizedPositionsDecodeWithinAHalfStep) {
+  GlbOptions o;
+  const auto f = frames();
+  auto bytes = encode_glb(f, o);
+  ASSERT_TRUE(bytes.has_value());
+  const auto j = glb_json(*bytes);
+  const std::size_t bin = 20 + u32(*bytes, 12) + 8;
+  // Frame 4: its node's child holds the mesh and the dequantization transform.
+  const int node = j["nodes"][0]["children"][4];
+  const auto& child = j["nodes"][j["nodes"][node]["children"][0].get<int>()];
+  const auto& prim = j["meshes"][child["mesh"].get<int>()]["primitives"][0];
+  const auto& acc = j["accessors"][prim["attributes"]["POSITION"].get<int>()];
+  const auto& view = j["bufferViews"][acc["bufferView"].get<int>()];
+  ASSERT_EQ(acc["count"], f[4].vertices.size());
+  double worst = 0.0, step = 0.0;
+  for (std::size_t i = 0; i < f[4].vertices.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      std::int16_t q;
+      std::memcpy(&q, bytes->data() + bin + view["byteOffset"].get<std::size_t>() + 8 * i + 2 * a, 2);
+      const double s = child["scale"][a], t = child["translation"][a];
+      const double v = t + s * std::max(q / 32767.0, -1.0);
+      worst = std::max(worst, std::abs(v - f[4].vertices[i][a]));
+      step = std::max(step, s / 32767.0);
+    }
+  EXPECT_LE(worst, 0.5 * step + 1e-7);
+  EXPECT_LT(step, 1e-4);  // 16 bits over a ~0.8 m box
+}
+
+TEST(WriteGlb, BadInputIsAClearError) {
+  GlbOptions o;
+  EXPECT_FALSE(encode_glb({}, o).has_value());
+  auto f = frames();
+  f[1].vertices[0].x() = NAN;
+  auto r = encode_glb(f, o);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("non-finite"), std::string::npos);
+  o.fps = 0;
+  EXPECT_FALSE(encode_glb(frames(), o).has_value());
+}
+
+// The Khronos validator and three.js's GLTFLoader (npm packages installed by scripts/setup) on both encodings.
+TEST(WriteGlb, PassesTheKhronosValidatorAndLoadsInThreeJs) {
+  const auto dir = test::temp_dir("glb");
+  const auto script = test::source_dir() / "scripts" / "check_glb.mjs";
+  ASSERT_TRUE(std::filesystem::exists(test::source_dir() / "node_modules" / "gltf-validator"))
+      << "npm packages missing: run scripts/setup";
+  for (const bool quantize : {false, true}) {
+    GlbOptions o;
+    o.quantize = quantize;
+    const auto f = frames();
+    const auto path = dir / (quantize ? "q.glb" : "f.glb");
+    ASSERT_TRUE(write_glb(path, f, o).ok());
+    const std::string cmd = "node '" + script.string() + "' '" + path.string() + "' 2>&1";
+    std::string out;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[4096];
+    while (std::fgets(buf, sizeof buf, p)) out += buf;
+    const int rc = ::pclose(p);
+    ASSERT_EQ(rc, 0) << out;
+    const auto j = nlohmann::json::parse(out, nullptr, false);
+    ASSERT_FALSE(j.is_discarded()) << out;
+    EXPECT_EQ(j["errors"], 0) << out;
+    EXPECT_EQ(j["three"]["meshes"], 4) << out;
+    EXPECT_EQ(j["three"]["clips"], 1) << out;
+    EXPECT_NEAR(j["three"]["duration"].get<double>(), 5.0 / 60.0, 1e-4) << out;  // the last frame holds 1/60 s
+    // At the end of the clip exactly the last frame shows, where it was written.
+    EXPECT_EQ(j["three"]["visible_at_end"], 1) << out;
+    EXPECT_EQ(j["three"]["vertices_last"], f[4].vertices.size()) << out;
+    const Aabb box = f[4].bounds();
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(j["three"]["box_last"][0][a].get<double>(), box.min[a], 1e-4) << out;
+      EXPECT_NEAR(j["three"]["box_last"][1][a].get<double>(), box.max[a], 1e-4) << out;
+    }
+  }
+}
+
+TEST(WritePc2, HeaderAndSamplesAreTheBlenderLayout) {
+  const auto dir = test::temp_dir("pc2");
+  std::vector<std::vector<Vec3f>> f = {{{0, 1, 2}, {3, 4, 5}}, {{6, 7, 8}, {9, 10, 11}}, {{1, 1, 1}, {2, 2, 2}}};
+  ASSERT_TRUE(write_pc2(dir / "p.pc2", f, 1.0f).ok());
+  const auto b = read_all(dir / "p.pc2");
+  ASSERT_EQ(b.size(), 32u + 3 * 2 * 12);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(b.data())), "POINTCACHE2");
+  EXPECT_EQ(u32(b, 12), 1u);  // version
+  EXPECT_EQ(u32(b, 16), 2u);  // points
+  float start, rate, last;
+  std::memcpy(&start, b.data() + 20, 4);
+  std::memcpy(&rate, b.data() + 24, 4);
+  EXPECT_EQ(start, 1.0f);
+  EXPECT_EQ(rate, 1.0f);
+  EXPECT_EQ(u32(b, 28), 3u);  // samples
+  std::memcpy(&last, b.data() + b.size() - 4, 4);
+  EXPECT_EQ(last, 2.0f);
+  f[1].pop_back();
+  EXPECT_FALSE(write_pc2(dir / "bad.pc2", f).ok());
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.pc2"));
+}
+
+}  // namespace
+}  // namespace ff::io
