@@ -1,0 +1,210 @@
+#include "surface/marching_cubes.h"
+
+#include "surface/block_loop.h"
+#include "surface/mc_table.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+
+namespace ff::surface {
+namespace {
+
+constexpr int kB = SparseField::kBlockCells;
+constexpr int kWords = kB * kB * kB * 3 / 64;  // crossed-edge bits of one block: 1536 edges
+constexpr Index kCentreFlag = Index(1) << 31;  // marks a block-local centre id until the final numbering
+
+constexpr int node_edge(int i, int j, int k, int axis) { return ((k * kB + j) * kB + i) * 3 + axis; }
+
+int corner_local(int i, int j, int k, int c) {
+  return SparseField::local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+}
+
+}  // namespace
+
+Result<McMesh> marching_cubes(const SparseField& field) {
+  const auto nb = std::int64_t(field.keys.size());
+  const float iso = field.iso;
+  const McTable& table = McTable::get();
+
+  // Kept neighbours at +x, +y, +z and their combinations (index = dx + 2 dy + 4 dz), −1 when absent.
+  std::vector<std::array<std::int64_t, 8>> up(field.keys.size());
+  for_each_block(nb, [&](std::int64_t b) {
+    const auto c = field.block_coords(field.keys[std::size_t(b)]);
+    for (int s = 0; s < 8; ++s) {
+      const std::int64_t x = c[0] + (s & 1), y = c[1] + ((s >> 1) & 1), z = c[2] + ((s >> 2) & 1);
+      const bool inside = x < field.block_dims[0] && y < field.block_dims[1] && z < field.block_dims[2];
+      up[std::size_t(b)][s] = inside ? field.find(field.block_key(x, y, z)) : -1;
+    }
+  });
+
+  // --- pass 1: which owned edges are crossed (edges from nodes [0, 8)³ of the block) -------------------------------
+  std::vector<std::uint64_t> bits(field.keys.size() * kWords, 0);
+  std::vector<std::uint16_t> rank(field.keys.size() * kWords, 0);  // crossed edges before each word
+  std::vector<std::uint32_t> count(field.keys.size(), 0);
+  for_each_block(nb, [&](std::int64_t b) {
+    const float* v = field.values[std::size_t(b)].data();
+    std::uint64_t* w = &bits[std::size_t(b) * kWords];
+    for (int k = 0; k < kB; ++k)
+      for (int j = 0; j < kB; ++j)
+        for (int i = 0; i < kB; ++i) {
+          const bool in0 = v[SparseField::local(i, j, k)] > iso;
+          const bool in[3] = {v[SparseField::local(i + 1, j, k)] > iso, v[SparseField::local(i, j + 1, k)] > iso,
+                              v[SparseField::local(i, j, k + 1)] > iso};
+          for (int a = 0; a < 3; ++a)
+            if (in0 != in[a]) {
+              const int e = node_edge(i, j, k, a);
+              w[e / 64] |= std::uint64_t(1) << (e % 64);
+            }
+        }
+    std::uint32_t total = 0;
+    for (int q = 0; q < kWords; ++q) {
+      rank[std::size_t(b) * kWords + std::size_t(q)] = std::uint16_t(total);
+      total += std::uint32_t(std::popcount(w[q]));
+    }
+    count[std::size_t(b)] = total;
+  });
+  std::vector<std::uint64_t> offset(field.keys.size() + 1, 0);
+  for (std::size_t b = 0; b < field.keys.size(); ++b) offset[b + 1] = offset[b] + count[b];
+  const std::uint64_t edge_vertices = offset.back();
+  if (edge_vertices >= kCentreFlag)
+    return numerical_error(fmt::format("surface: {} marching-cubes vertices exceed 2^31", edge_vertices));
+
+  McMesh out;
+  out.mesh.vertices.resize(edge_vertices);
+  out.cluster.resize(edge_vertices);
+  const auto nd = field.node_dims();
+
+  // --- pass 1b: vertex positions and regularisation cells, in bit order -------------------------------------------
+  for_each_block(nb, [&](std::int64_t b) {
+    const float* v = field.values[std::size_t(b)].data();
+    const std::uint64_t* w = &bits[std::size_t(b) * kWords];
+    const auto c = field.block_coords(field.keys[std::size_t(b)]);
+    std::uint64_t id = offset[std::size_t(b)];
+    for (int q = 0; q < kWords; ++q)
+      for (std::uint64_t word = w[q]; word; word &= word - 1) {
+        const int e = q * 64 + std::countr_zero(word);
+        const int a = e % 3, node = e / 3;
+        const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
+        int l1[3] = {l[0], l[1], l[2]};
+        ++l1[a];
+        const float v0 = v[SparseField::local(l[0], l[1], l[2])];
+        const float v1 = v[SparseField::local(l1[0], l1[1], l1[2])];
+        const float t = std::clamp((iso - v0) / (v1 - v0), 0.01f, 0.99f);
+        std::int64_t g[3];
+        Vec3d p;
+        for (int ax = 0; ax < 3; ++ax) {
+          g[ax] = c[ax] * kB + l[ax];
+          p[ax] = field.origin[ax] + field.cell * (double(g[ax]) + (ax == a ? double(t) : 0.0));
+        }
+        if (t >= 0.5f) ++g[a];  // the nearer node owns the vertex
+        out.mesh.vertices[id] = p.cast<float>();
+        out.cluster[id] = std::uint64_t((g[2] * nd[1] + g[1]) * nd[0] + g[0]);
+        ++id;
+      }
+  });
+
+  // --- pass 2: triangles per block, vertices looked up in the owning block --------------------------------------
+  std::vector<std::vector<std::array<Index, 3>>> tris(field.keys.size());
+  std::vector<std::vector<Vec3f>> centres(field.keys.size());
+  std::atomic<bool> broken{false};
+  for_each_block(nb, [&](std::int64_t b) {
+    const float* v = field.values[std::size_t(b)].data();
+    auto& bt = tris[std::size_t(b)];
+    auto& bc = centres[std::size_t(b)];
+    auto vertex_of = [&](int i, int j, int k, int e) -> Index {
+      const CubeEdge ce = McTable::edge(e);
+      int n[3] = {i + (ce.c0 & 1), j + ((ce.c0 >> 1) & 1), k + ((ce.c0 >> 2) & 1)};
+      int s = 0;
+      for (int a = 0; a < 3; ++a)
+        if (n[a] == kB) {
+          s |= 1 << a;
+          n[a] = 0;
+        }
+      const std::int64_t owner = up[std::size_t(b)][s];
+      if (owner < 0) {
+        broken = true;
+        return 0;
+      }
+      const int le = node_edge(n[0], n[1], n[2], ce.axis);
+      const std::uint64_t* w = &bits[std::size_t(owner) * kWords];
+      const std::uint64_t word = w[le / 64], below = word & ((std::uint64_t(1) << (le % 64)) - 1);
+      if (!((word >> (le % 64)) & 1)) {
+        broken = true;
+        return 0;
+      }
+      return Index(offset[std::size_t(owner)] + rank[std::size_t(owner) * kWords + std::size_t(le / 64)] +
+                   std::uint64_t(std::popcount(below)));
+    };
+    for (int k = 0; k < kB; ++k)
+      for (int j = 0; j < kB; ++j)
+        for (int i = 0; i < kB; ++i) {
+          float cv[8];
+          int mask = 0;
+          for (int c = 0; c < 8; ++c) {
+            cv[c] = v[corner_local(i, j, k, c)];
+            mask |= int(cv[c] > iso) << c;
+          }
+          if (mask == 0 || mask == 255) continue;
+          int centres_in = 0;
+          for (int q = 0; q < table.ambiguous_count(mask); ++q) {
+            const int f = table.ambiguous_face(mask, q), a = f / 2;
+            const int u = a == 0 ? 1 : 0, w = a == 2 ? 1 : 2;
+            const int c00 = (f & 1) << a, c10 = c00 | (1 << u), c01 = c00 | (1 << w), c11 = c10 | (1 << w);
+            if (face_centre_inside(cv[c00] - iso, cv[c10] - iso, cv[c01] - iso, cv[c11] - iso)) centres_in |= 1 << q;
+          }
+          const CubeTriangulation& ct = table.cube(mask, centres_in);
+          std::array<Index, 16> ref{};
+          for (int e = 0; e < 12; ++e) {
+            const CubeEdge ce = McTable::edge(e);
+            if (((mask >> ce.c0) & 1) != ((mask >> ce.c1) & 1)) ref[std::size_t(e)] = vertex_of(i, j, k, e);
+          }
+          for (int q = 0; q < ct.centre_count; ++q) {
+            Vec3f sum = Vec3f::Zero();
+            int m = 0;
+            for (int e = 0; e < 12; ++e)
+              if ((ct.centre_edges[std::size_t(q)] >> e) & 1) {
+                sum += out.mesh.vertices[ref[std::size_t(e)]];
+                ++m;
+              }
+            ref[std::size_t(12 + q)] = kCentreFlag | Index(bc.size());
+            bc.push_back(sum / float(m));
+          }
+          for (int t = 0; t < ct.triangle_count; ++t) {
+            const auto& tr = ct.triangles[std::size_t(t)];
+            bt.push_back({ref[tr[0]], ref[tr[1]], ref[tr[2]]});
+          }
+        }
+  });
+  if (broken) return numerical_error("surface: marching cubes found an edge missing from its block (internal error)");
+
+  // --- concatenate in block order; centres after all edge vertices ---------------------------------------------------
+  std::size_t total_tris = 0, total_centres = 0;
+  for (std::size_t b = 0; b < tris.size(); ++b) {
+    total_tris += tris[b].size();
+    total_centres += centres[b].size();
+  }
+  if (edge_vertices + total_centres >= kCentreFlag)
+    return numerical_error("surface: more than 2^31 marching-cubes vertices");
+  out.mesh.triangles.reserve(total_tris);
+  out.mesh.vertices.reserve(edge_vertices + total_centres);
+  out.cluster.reserve(edge_vertices + total_centres);
+  for (std::size_t b = 0; b < tris.size(); ++b) {
+    const auto base = Index(out.mesh.vertices.size());
+    for (auto t : tris[b]) {
+      for (auto& x : t)
+        if (x & kCentreFlag) x = base + (x & ~kCentreFlag);
+      out.mesh.triangles.push_back(t);
+    }
+    out.mesh.vertices.insert(out.mesh.vertices.end(), centres[b].begin(), centres[b].end());
+    out.cluster.insert(out.cluster.end(), centres[b].size(), kNoCluster);
+    std::vector<std::array<Index, 3>>().swap(tris[b]);
+  }
+  out.centre_vertices = total_centres;
+  return out;
+}
+
+}  // namespace ff::surface
