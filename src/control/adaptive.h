@@ -2,8 +2,10 @@
 // `adaptive`: the paper's controller (Zhou et al., §4, Algorithms 1–2), as specified in METHOD.md §a.2–§a.6.
 //
 // Per sub-step (the solver's hook order, METHOD §a.6):
-//   begin_step        control–fluid pairs within H_c (both directions); ρ_p,i at x; bond radius H_c*,i (eq. 19);
-//                     bonds B(j) = {i : |x_ci − x_j| ≤ H_c*,i} (frozen for the sub-step); controlled = B(j) ≠ ∅
+//   begin_step        sample → fluid pairs within H_c (one grid query; samples are kept sorted by cell, so
+//                     neighbouring queries share candidates); ρ_p,i at x; bond radius H_c*,i (eq. 19);
+//                     bonds B(j) = {i : |x_ci − x_j| ≤ H_c*,i} (frozen for the sub-step), the transpose of the
+//                     pairs by a counting sort; controlled = B(j) ≠ ∅
 //   add_accelerations boundary correction (eq. 15–16) for controlled particles; gather (ours, §a.10) for
 //                     unbonded particles of a target that is not full
 //   correct_positions iteration 0: the adaptive spring (eq. 17–18, once per sub-step);
@@ -11,7 +13,8 @@
 //                     at x* (eq. 6–8), then Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij (eq. 10), clamped
 // Fluid particle j belongs to one target (ParticleSet::target) and only that target's samples act on it:
 // "each model independently controls the fluid", and no particle can be pulled back and forth between
-// targets. Every loop is a gather with a fixed order, so a run is bit-identical for any thread count.
+// targets. Every loop is a gather with a fixed order (the transpose keeps each particle's bonds in ascending
+// sample order), so a run is bit-identical for any thread count.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/nearest_seed_field.h"
