@@ -1,6 +1,7 @@
 // fluidform command line (DESIGN.md "The CLI and output contract").
 // Exit codes: 0 ok, 2 bad input or usage, 1 runtime failure. Errors are one line on stderr.
 #include "app/progress_bar.h"
+#include "app/mesh_export.h"
 #include "app/run_pipeline.h"
 #include "control/registry.h"
 #include "io/atomic_file.h"
@@ -53,6 +54,10 @@ int cmd_run(const fs::path& scene_file, const ff::app::RunOptions& opt) {
   spdlog::info("done: {} particles, {} frames, {:.2f} ms per frame (simulation only), peak memory {:.0f} MiB -> {}",
                sum->particles, sum->frames_written, 1e3 * sum->mean_frame_seconds, sum->peak_memory_mib,
                opt.out_dir.string());
+  if (opt.mesh)
+    spdlog::info("mesh: {} frame(s) in {:.2f} s; final.obj {} triangles, {} -> {}", sum->mesh_frames, sum->mesh_seconds,
+                 sum->mesh_triangles, sum->mesh_ok ? "watertight and manifold" : "NOT watertight/manifold",
+                 (opt.out_dir / "mesh" / "final.obj").string());
   if (sum->has_targets && spdlog::get_level() <= spdlog::level::info) {  // -q: no summary
     // The one-screen summary (issue 4): the paper's Table 3 columns and the numbers that keep E honest.
     fmt::print(stdout,
@@ -110,6 +115,30 @@ int cmd_sample(SampleOptions o) {
   return 0;
 }
 
+struct MeshCliOptions {
+  fs::path input, out;
+  ff::app::MeshOptions mesh;
+  bool no_glb = false, no_pc2 = false, no_frames = false, final_only = false, no_quantize = false;
+};
+
+int cmd_mesh(MeshCliOptions o) {
+  o.mesh.glb = !o.no_glb, o.mesh.pc2 = !o.no_pc2, o.mesh.frame_objs = !o.no_frames, o.mesh.final_only = o.final_only;
+  o.mesh.quantize = !o.no_quantize;
+  if (auto st = o.mesh.validate(); !st.ok()) return fail(st.error());
+  auto frames = ff::app::particle_frames(o.input);
+  if (!frames) return fail(frames.error());
+  spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());
+  ff::app::ProgressBar bar(stderr);
+  auto sum = ff::app::export_meshes(*frames, o.out, o.mesh, bar);
+  if (!sum) return fail(sum.error());
+  spdlog::info("mesh: {} frame(s) meshed in {:.2f} s at spacing {:.4g} m; final.obj: {} triangles, {} vertices ({} from "
+               "marching cubes), {}, genus {}, {} component(s) -> {}",
+               sum->frames_meshed, sum->seconds, sum->spacing, sum->final_triangles, sum->final_vertices,
+               sum->mc_triangles_final, sum->final_ok ? "watertight and manifold" : "NOT watertight/manifold",
+               sum->final_genus, sum->final_components, (o.out / "mesh" / "final.obj").string());
+  return sum->final_ok ? 0 : fail(ff::numerical_error("mesh: the final mesh failed its checks"));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -131,6 +160,11 @@ int main(int argc, char** argv) {
   run->add_option("-o,--out", run_opt.out_dir, "output folder")->capture_default_str();
   run->add_option("--frames", frames, "output frames to simulate (overrides output.frames)")->check(CLI::Range(1, 10'000'000));
   run->add_flag("--resume", run_opt.resume, "continue a killed run from OUT/checkpoint/");
+  bool no_mesh = false;
+  run->add_flag("--no-mesh", no_mesh, "do not reconstruct the last frame into OUT/mesh/final.obj");
+  run->add_option("--mesh-every", run_opt.mesh_every,
+                  "also mesh every k-th frame: OUT/mesh/frame_NNNNN.obj, OUT/animation.glb, OUT/particles.pc2")
+      ->check(CLI::Range(1, 1'000'000));
   std::string controller_name;
   run->add_option("--controller", controller_name,
                   "shape controller: " + ff::control::controller_names() + " (overrides the scene's controller.name)");
@@ -152,6 +186,22 @@ int main(int argc, char** argv) {
                      "sparse sampling: remove the samples in the box x0 y0 z0 x1 y1 z1 (repeatable)")
       ->expected(6)->allow_extra_args(false);
 
+  MeshCliOptions mesh_opt;
+  auto* mesh = app.add_subcommand("mesh", "reconstruct particle frames into meshes, a GLB animation and a Blender point cache");
+  mesh->add_option("input", mesh_opt.input, "a particle PLY, a folder of frame_NNNNN.ply, or a run's output folder")->required();
+  mesh->add_option("-o,--out", mesh_opt.out, "output folder (mesh/, animation.glb, particles.pc2)")->required();
+  mesh->add_option("--every", mesh_opt.mesh.every, "mesh every k-th frame (and the last)")->capture_default_str();
+  mesh->add_flag("--final-only", mesh_opt.final_only, "mesh only the last frame (mesh/final.obj)");
+  mesh->add_option("--spacing", mesh_opt.mesh.spacing, "particle spacing d in metres (default: from the frames' header, or estimated)");
+  mesh->add_option("--triangles", mesh_opt.mesh.params.max_triangles, "triangle budget per mesh (0: none)")->capture_default_str();
+  mesh->add_option("--cell", mesh_opt.mesh.params.cell_size, "grid cell size in spacings")->capture_default_str();
+  mesh->add_option("--smoothing", mesh_opt.mesh.params.smoothing_passes, "smoothing passes (paper eq. 20-21)")->capture_default_str();
+  mesh->add_option("--fps", mesh_opt.mesh.fps, "frames per second of the animation")->capture_default_str();
+  mesh->add_flag("--no-glb", mesh_opt.no_glb, "do not write animation.glb");
+  mesh->add_flag("--no-pc2", mesh_opt.no_pc2, "do not write particles.pc2 / particles_frame0.ply");
+  mesh->add_flag("--no-frames", mesh_opt.no_frames, "do not write mesh/frame_NNNNN.obj");
+  mesh->add_flag("--no-quantize", mesh_opt.no_quantize, "store float positions and normals in the GLB");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -163,6 +213,7 @@ int main(int argc, char** argv) {
     return fail(ff::param_error(msg + " (see fluidform --help)"));
   }
   if (quiet) spdlog::set_level(spdlog::level::warn);
+  run_opt.mesh = !no_mesh;
   if (frames > 0) run_opt.frames = frames;
   if (!controller_name.empty()) {
     if (!ff::control::find_controller(controller_name))
@@ -172,6 +223,7 @@ int main(int argc, char** argv) {
 
   if (*run) return cmd_run(scene_file, run_opt);
   if (*sample) return cmd_sample(std::move(sample_opt));
+  if (*mesh) return cmd_mesh(std::move(mesh_opt));
   // No sub-command: the bundled default scene into ./fluidform-out.
   return cmd_run(default_scene(), ff::app::RunOptions{});
 }

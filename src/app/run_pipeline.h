@@ -16,6 +16,8 @@ struct RunOptions {
   bool resume = false;        ///< continue from OUT/checkpoint/ if present
   std::optional<std::string> controller;  ///< overrides scene.controller.name
   int max_auto_frames = 600;  ///< cap of a run that stops once the shape has formed (no --frames, no output.frames)
+  bool mesh = true;           ///< reconstruct the last frame into OUT/mesh/final.obj
+  int mesh_every = 0;         ///< > 0: also every k-th frame → OUT/mesh/frame_NNNNN.obj, animation.glb, particles.pc2
 };
 
 /// What a finished run reports to the CLI.
@@ -29,6 +31,10 @@ struct RunSummary {
   bool has_targets = false;
   std::size_t control_particles = 0, controlled = 0;
   double error_rate = 0, inside_fraction = 0, splash_fraction = 0, time_to_form = 0, e_fwd_all = 0, error_spacings = 0;
+  // Meshing (when RunOptions::mesh).
+  std::size_t mesh_triangles = 0, mesh_frames = 0;
+  bool mesh_ok = false;
+  double mesh_seconds = 0.0;
 };
 
 /// Runs the scene into `options.out_dir`. Everything already written stays valid on any error.

@@ -50,6 +50,70 @@ Status write_file_atomic(const fs::path& path, std::string_view text) {
   return write_file_atomic(path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
+AtomicFileWriter::~AtomicFileWriter() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    ::unlink(tmp_.c_str());
+  }
+}
+
+Status AtomicFileWriter::fail(int err) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  ::unlink(tmp_.c_str());
+  return io_error(fmt::format("cannot write {}: {}", path_.string(), std::strerror(err)));
+}
+
+Status AtomicFileWriter::open(const fs::path& path) {
+  if (fd_ >= 0) return io_error(fmt::format("cannot write {}: a file is already open", path.string()));
+  path_ = path;
+  tmp_ = path.string() + fmt::format(".tmp.{}", ::getpid());
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) return io_error(fmt::format("cannot write {}: {}", path.string(), std::strerror(errno)));
+  return {};
+}
+
+Status AtomicFileWriter::write(std::span<const std::uint8_t> bytes) {
+  if (fd_ < 0) return io_error(fmt::format("cannot write {}: not open", path_.string()));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t w = ::write(fd_, bytes.data() + done, bytes.size() - done);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return fail(errno);
+    }
+    done += static_cast<std::size_t>(w);
+  }
+  return {};
+}
+
+Status AtomicFileWriter::write_at(std::uint64_t offset, std::span<const std::uint8_t> bytes) {
+  if (fd_ < 0) return io_error(fmt::format("cannot write {}: not open", path_.string()));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t w = ::pwrite(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return fail(errno);
+    }
+    done += static_cast<std::size_t>(w);
+  }
+  return {};
+}
+
+Status AtomicFileWriter::commit() {
+  if (fd_ < 0) return io_error(fmt::format("cannot write {}: not open", path_.string()));
+  if (::fdatasync(fd_) != 0) return fail(errno);
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0 || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp_.c_str());
+    return io_error(fmt::format("cannot write {}: {}", path_.string(), std::strerror(e)));
+  }
+  return {};
+}
+
 Status ensure_writable_dir(const fs::path& dir) {
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))

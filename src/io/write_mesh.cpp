@@ -269,29 +269,59 @@ Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh
   return write_file_atomic(path, *bytes);
 }
 
-Status write_pc2(const std::filesystem::path& path, std::span<const std::vector<Vec3f>> frames, float start_frame) {
-  if (frames.empty()) return param_error(fmt::format("{}: a point cache needs at least one frame", path.string()));
-  if (!std::isfinite(start_frame)) return param_error(fmt::format("{}: start frame must be finite", path.string()));
-  const std::size_t n = frames.front().size();
-  for (std::size_t k = 0; k < frames.size(); ++k)
-    if (frames[k].size() != n)
-      return param_error(fmt::format("{}: frame {} has {} points, frame 0 has {}", path.string(), k, frames[k].size(), n));
-  if (n > std::numeric_limits<std::int32_t>::max() || frames.size() > std::numeric_limits<std::int32_t>::max())
-    return param_error(fmt::format("{}: too many points or frames for PC2", path.string()));
-  // PC2: "POINTCACHE2\0", int32 version 1, int32 points, float start frame, float sample rate (frames per
-  // sample), int32 samples; then samples × points × float[3], little-endian.
+namespace {
+
+// PC2: "POINTCACHE2\0", int32 version 1, int32 points, float start frame, float sample rate (frames per sample),
+// int32 samples; then samples × points × float[3], little-endian.
+std::vector<std::uint8_t> pc2_header(std::size_t points, float start_frame, std::size_t samples) {
   std::vector<std::uint8_t> out;
-  out.reserve(32 + frames.size() * n * 12);
   const char magic[12] = "POINTCACHE2";
   out.insert(out.end(), magic, magic + 12);
   put<std::int32_t>(out, 1);
-  put<std::int32_t>(out, static_cast<std::int32_t>(n));
+  put<std::int32_t>(out, static_cast<std::int32_t>(points));
   put<float>(out, start_frame);
   put<float>(out, 1.0f);  // one sample per frame (Blender plays it at the scene's frame rate)
-  put<std::int32_t>(out, static_cast<std::int32_t>(frames.size()));
-  for (const auto& f : frames)
-    for (const auto& p : f) put<float>(out, p.x()), put<float>(out, p.y()), put<float>(out, p.z());
-  return write_file_atomic(path, out);
+  put<std::int32_t>(out, static_cast<std::int32_t>(samples));
+  return out;
+}
+
+}  // namespace
+
+Status Pc2Writer::open(const std::filesystem::path& path, std::size_t points, float start_frame) {
+  if (!std::isfinite(start_frame)) return param_error(fmt::format("{}: start frame must be finite", path.string()));
+  if (points > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    return param_error(fmt::format("{}: {} points is too many for PC2", path.string(), points));
+  path_ = path, points_ = points, frames_ = 0;
+  FF_CHECK(file_.open(path));
+  return file_.write(pc2_header(points, start_frame, 0));
+}
+
+Status Pc2Writer::add(std::span<const Vec3f> frame) {
+  if (frame.size() != points_)
+    return param_error(fmt::format("{}: frame {} has {} points, the cache has {}", path_.string(), frames_, frame.size(), points_));
+  if (frames_ + 1 > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    return param_error(fmt::format("{}: too many frames for PC2", path_.string()));
+  buf_.clear();
+  for (const auto& p : frame) put<float>(buf_, p.x()), put<float>(buf_, p.y()), put<float>(buf_, p.z());
+  FF_CHECK(file_.write(buf_));
+  ++frames_;
+  return {};
+}
+
+Status Pc2Writer::finish() {
+  if (frames_ == 0) return param_error(fmt::format("{}: a point cache needs at least one frame", path_.string()));
+  std::vector<std::uint8_t> count;
+  put<std::int32_t>(count, static_cast<std::int32_t>(frames_));
+  FF_CHECK(file_.write_at(28, count));
+  return file_.commit();
+}
+
+Status write_pc2(const std::filesystem::path& path, std::span<const std::vector<Vec3f>> frames, float start_frame) {
+  if (frames.empty()) return param_error(fmt::format("{}: a point cache needs at least one frame", path.string()));
+  Pc2Writer w;
+  FF_CHECK(w.open(path, frames.front().size(), start_frame));
+  for (const auto& f : frames) FF_CHECK(w.add(f));
+  return w.finish();
 }
 
 }  // namespace ff::io

@@ -7,6 +7,7 @@
 // are written as they are. Every file is written atomically (temp file + rename).
 #include "core/error.h"
 #include "core/types.h"
+#include "io/atomic_file.h"
 #include "io/triangle_mesh.h"
 
 #include <cstdint>
@@ -44,5 +45,21 @@ Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh
 /// Blender point cache (PC2, read by the Mesh Cache modifier): `frames[k][i]` is particle i at frame k. Every frame
 /// must have the same number of points (the caller pads by particle id); one sample per frame from `start_frame`.
 Status write_pc2(const std::filesystem::path& path, std::span<const std::vector<Vec3f>> frames, float start_frame = 0.0f);
+
+/// The same point cache written frame by frame (a long run's frames need not fit in memory). The header's
+/// sample count is filled in by finish(), which publishes the file atomically; without it nothing is written.
+class Pc2Writer {
+ public:
+  Status open(const std::filesystem::path& path, std::size_t points, float start_frame = 0.0f);
+  Status add(std::span<const Vec3f> frame);
+  Status finish();
+  std::size_t frames() const { return frames_; }
+
+ private:
+  AtomicFileWriter file_;
+  std::filesystem::path path_;
+  std::size_t points_ = 0, frames_ = 0;
+  std::vector<std::uint8_t> buf_;
+};
 
 }  // namespace ff::io

@@ -1,5 +1,6 @@
 // End-to-end tests of the fluidform binary: outputs, exit codes, one-line errors, no partial files,
 // thread-count independence and kill -9 + --resume.
+#include "e2e/cli_support.h"
 #include "io/write_ply.h"
 #include "sampling/control_io.h"
 #include "support/test_support.h"
@@ -18,69 +19,10 @@
 #include <thread>
 #include <unistd.h>
 
-extern char** environ;
-
 namespace ff {
 namespace {
 namespace fs = std::filesystem;
-
-struct Proc {
-  pid_t pid = -1;
-  fs::path err_file;
-};
-
-// Starts the binary with `args`, stderr into a file; `threads` sets OMP_NUM_THREADS when > 0.
-Proc start(const std::vector<std::string>& args, int threads = 0) {
-  static int counter = 0;
-  Proc p;
-  p.err_file = fs::temp_directory_path() / ("fluidform-e2e-stderr-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-  std::vector<std::string> argv_s{test::binary().string()};
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& s : argv_s) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  std::vector<std::string> env_s;
-  for (char** e = environ; *e; ++e)
-    if (std::string(*e).rfind("OMP_NUM_THREADS=", 0) != 0) env_s.emplace_back(*e);
-  if (threads > 0) env_s.push_back("OMP_NUM_THREADS=" + std::to_string(threads));
-  std::vector<char*> envp;
-  for (auto& s : env_s) envp.push_back(s.data());
-  envp.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 2, p.err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  EXPECT_EQ(posix_spawn(&p.pid, argv[0], &fa, nullptr, argv.data(), envp.data()), 0);
-  posix_spawn_file_actions_destroy(&fa);
-  return p;
-}
-
-struct Outcome {
-  int code = -1;
-  std::string err;
-};
-
-Outcome wait(const Proc& p) {
-  int status = 0;
-  ::waitpid(p.pid, &status, 0);
-  std::ifstream in(p.err_file);
-  std::string err((std::istreambuf_iterator<char>(in)), {});
-  fs::remove(p.err_file);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), err};
-}
-
-Outcome run(const std::vector<std::string>& args, int threads = 0) { return wait(start(args, threads)); }
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-fs::path write_scene(const fs::path& dir, const std::string& json, const std::string& name = "scene.json") {
-  std::ofstream(dir / name) << json;
-  return dir / name;
-}
+using namespace e2e;
 
 // ~670 particles, a small dam break.
 const std::string kSmallScene = R"({
@@ -89,18 +31,6 @@ const std::string kSmallScene = R"({
   "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.28, 0.48, 0.32]}],
   "output": {"frames": 12, "checkpoint_every": 4}
 })";
-
-std::size_t count_lines(const std::string& s) {
-  std::size_t n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
-
-void expect_no_temp_files(const fs::path& dir) {
-  if (!fs::exists(dir)) return;
-  for (const auto& e : fs::recursive_directory_iterator(dir))
-    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "partial file left: " << e.path();
-}
 
 TEST(Cli, RunWritesFramesReportAndMetrics) {
   const auto dir = test::temp_dir("run");
@@ -264,12 +194,6 @@ TEST(Cli, AFailedRunKeepsWhatItWroteBefore) {
   EXPECT_EQ(run({"-q", "run", (dir / "bad.json").string(), "-o", (dir / "o").string()}).code, 2);
   EXPECT_EQ(read_file(dir / "o" / "particles" / "frame_00012.ply"), before);
 }
-
-}  // namespace
-}  // namespace ff
-
-namespace ff {
-namespace {
 
 TEST(Cli, SampleWritesControlParticlesWithWeights) {
   const auto dir = test::temp_dir("sample");

@@ -1,0 +1,237 @@
+#include "app/mesh_export.h"
+
+#include "core/neighbor_grid.h"
+#include "core/timer.h"
+#include "io/atomic_file.h"
+#include "io/write_mesh.h"
+#include "io/write_ply.h"
+#include "surface/mesh_check.h"
+#include "surface/reconstruct.h"
+
+#include <fmt/format.h>
+#include <omp.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <regex>
+
+namespace ff::app {
+namespace fs = std::filesystem;
+
+namespace {
+
+// frame_NNNNN.ply → NNNNN; −1 for other names.
+long frame_number(const fs::path& p) {
+  static const std::regex re(R"(frame_(\d+)\.ply)");
+  std::smatch m;
+  const std::string name = p.filename().string();
+  return std::regex_match(name, m, re) ? std::stol(m[1].str()) : -1;
+}
+
+// "spacing D" in a particle PLY's header comments (written by `run`), or 0.
+float spacing_from_comments(const io::ParticleFrame& f) {
+  for (const auto& c : f.comments) {
+    if (c.rfind("spacing ", 0) != 0) continue;
+    try {
+      const float d = std::stof(c.substr(8));
+      if (d > 0.0f && std::isfinite(d)) return d;
+    } catch (...) {
+    }
+  }
+  return 0.0f;
+}
+
+}  // namespace
+
+Status MeshOptions::validate() const {
+  FF_CHECK(params.validate("surface"));
+  if (!(spacing >= 0.0f) || !std::isfinite(spacing)) return param_error(fmt::format("mesh: spacing {} must be ≥ 0", spacing));
+  if (every < 1) return param_error(fmt::format("mesh: --every {} must be ≥ 1", every));
+  if (!(fps > 0.0) || !std::isfinite(fps)) return param_error(fmt::format("mesh: fps {} must be > 0", fps));
+  return {};
+}
+
+Result<std::vector<fs::path>> particle_frames(const fs::path& input) {
+  std::error_code ec;
+  if (!fs::exists(input, ec)) return input_error(fmt::format("{}: no such file or folder", input.string()));
+  if (!fs::is_directory(input, ec)) return std::vector<fs::path>{input};
+  fs::path dir = input;
+  if (fs::is_directory(input / "particles", ec)) dir = input / "particles";
+  std::vector<std::pair<long, fs::path>> found;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (const long k = frame_number(e.path()); k >= 0 && e.is_regular_file(ec)) found.emplace_back(k, e.path());
+  if (ec) return io_error(fmt::format("{}: {}", dir.string(), ec.message()));
+  if (found.empty()) return input_error(fmt::format("{}: no particle frames (frame_NNNNN.ply) in it", dir.string()));
+  std::sort(found.begin(), found.end());
+  std::vector<fs::path> out;
+  for (auto& [k, p] : found) out.push_back(std::move(p));
+  return out;
+}
+
+Result<float> estimate_spacing(std::span<const Vec3f> points) {
+  if (points.size() < 2) return input_error("cannot estimate the particle spacing from fewer than 2 particles; give --spacing");
+  Aabb box;
+  for (const auto& p : points) box.extend(p);
+  const Vec3f ext = box.max - box.min;
+  // A radius that certainly holds a neighbour in a fluid: twice the spacing of the points spread over their box.
+  const double vol = std::max<double>(double(ext.x()) * ext.y() * ext.z(), 1e-30);
+  float r = static_cast<float>(2.0 * std::cbrt(vol / double(points.size())));
+  r = std::max(r, 1e-6f * std::max(1.0f, ext.maxCoeff()));
+  std::vector<Vec3f> probe;
+  const std::size_t stride = std::max<std::size_t>(1, points.size() / 4096);
+  for (std::size_t i = 0; i < points.size(); i += stride) probe.push_back(points[i]);
+  for (int attempt = 0; attempt < 4; ++attempt, r *= 2.0f) {
+    core::NeighborGrid grid(r);
+    grid.build(points);
+    core::NeighborList nl;
+    grid.query(points, probe, r, nl);
+    std::vector<float> nn;
+    for (std::size_t q = 0; q < probe.size(); ++q) {
+      float best = INFINITY;
+      for (Index j : nl.of(q)) {
+        const float d2 = (points[j] - probe[q]).squaredNorm();
+        if (d2 > 0.0f) best = std::min(best, d2);
+      }
+      if (std::isfinite(best)) nn.push_back(std::sqrt(best));
+    }
+    if (nn.size() * 2 >= probe.size()) {
+      std::nth_element(nn.begin(), nn.begin() + static_cast<std::ptrdiff_t>(nn.size() / 2), nn.end());
+      return nn[nn.size() / 2];
+    }
+  }
+  return input_error("cannot estimate the particle spacing (the particles are too scattered); give --spacing");
+}
+
+Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::path& out, const MeshOptions& o,
+                                  core::Progress& progress) {
+  FF_CHECK(o.validate());
+  if (frames.empty()) return input_error("mesh: no particle frames");
+  core::Stopwatch watch;
+  MeshSummary sum;
+  sum.frames_read = frames.size();
+  FF_CHECK(io::ensure_writable_dir(out));
+  FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+
+  // The frames to mesh: every k-th and the last, or only the last.
+  std::vector<std::size_t> chosen;
+  if (o.final_only) {
+    chosen.push_back(frames.size() - 1);
+  } else {
+    for (std::size_t k = 0; k < frames.size(); k += static_cast<std::size_t>(o.every)) chosen.push_back(k);
+    if (chosen.back() != frames.size() - 1) chosen.push_back(frames.size() - 1);
+  }
+
+  // The spacing: given, else from the last frame's header, else estimated from it.
+  float d = o.spacing;
+  {
+    auto last = io::read_particles_ply(frames.back());
+    if (!last) return last.error();
+    if (d == 0.0f) d = spacing_from_comments(*last);
+    if (d == 0.0f) {
+      auto est = estimate_spacing(last->positions);
+      if (!est) return Error{est.error().kind, fmt::format("{}: {}", frames.back().string(), est.error().message)};
+      d = *est;
+      sum.spacing_estimated = true;
+      spdlog::info("mesh: particle spacing estimated from the particles: {:.4g} m (give --spacing to set it)", d);
+    }
+  }
+  sum.spacing = d;
+
+  // Reconstruct several frames at once, one thread each (reconstruct() is deterministic for any thread count, so
+  // the meshes do not depend on how frames are spread).
+  std::vector<io::TriangleMesh> meshes(chosen.size());
+  std::vector<Error> errors(chosen.size());
+  std::vector<char> failed(chosen.size(), 0);
+  std::vector<surface::SurfaceStats> stats(chosen.size());
+  progress.begin("meshing", chosen.size());
+  std::atomic<std::size_t> done{0};
+  std::atomic<bool> cancelled{false};
+  const int threads = std::min<int>(omp_get_max_threads(), static_cast<int>(chosen.size()));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    if (cancelled.load()) continue;
+    const fs::path& file = frames[chosen[c]];
+    auto f = io::read_particles_ply(file);
+    Result<io::TriangleMesh> mesh = f ? surface::reconstruct(f->positions, d, o.params, &stats[c]) : Result<io::TriangleMesh>(f.error());
+    if (!mesh) {
+      failed[c] = 1;
+      errors[c] = Error{mesh.error().kind, fmt::format("{}: {}", file.string(), mesh.error().message)};
+    } else {
+      meshes[c] = std::move(*mesh);
+      if (o.frame_objs && !o.final_only) {
+        const long k = frame_number(file);
+        const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
+        if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string())); !st.ok())
+          failed[c] = 1, errors[c] = st.error();
+      }
+    }
+    const std::size_t now = ++done;
+#pragma omp critical(ff_mesh_progress)
+    if (!progress.tick(now)) cancelled = true;
+  }
+  progress.end();
+  if (cancelled) return Error{Error::Kind::Cancelled, "mesh: cancelled"};
+  for (std::size_t c = 0; c < chosen.size(); ++c)
+    if (failed[c]) return errors[c];
+  sum.frames_meshed = chosen.size();
+
+  const io::TriangleMesh& fin = meshes.back();
+  const auto check = surface::check_mesh(fin);
+  sum.final_triangles = fin.triangles.size();
+  sum.final_vertices = fin.vertices.size();
+  sum.mc_triangles_final = stats.back().mc_triangles;
+  sum.final_ok = check.ok();
+  sum.final_genus = check.genus;
+  sum.final_components = check.components;
+  if (fin.triangles.empty())
+    spdlog::warn("mesh: the last frame made no surface (too few particles close together); final.obj is empty");
+  FF_CHECK(io::write_obj(out / "mesh" / "final.obj", fin, true,
+                         fmt::format("fluidform editable mesh of {}\nspacing {:.6g} m; {}", frames.back().filename().string(), d,
+                                     check.summary())));
+
+  if (o.glb && !o.final_only) {
+    io::GlbOptions g;
+    g.fps = o.fps;
+    g.quantize = o.quantize;
+    for (std::size_t c : chosen) {
+      const long k = frame_number(frames[c]);
+      g.times.push_back(double(k >= 0 ? k : static_cast<long>(c)) / o.fps);
+    }
+    FF_CHECK(io::write_glb(out / "animation.glb", meshes, g));
+  }
+
+  if (o.pc2 && !o.final_only) {
+    // Every particle frame, in order. Particles are written sorted by id, so entry i is the same particle in
+    // every frame; a frame with fewer particles (an emitter still filling) is padded with the last frame's
+    // positions of the missing ones.
+    auto last = io::read_particles_ply(frames.back());
+    if (!last) return last.error();
+    const std::size_t n = last->positions.size();
+    io::Pc2Writer pc2;
+    FF_CHECK(pc2.open(out / "particles.pc2", n, 0.0f));
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      auto f = io::read_particles_ply(frames[k]);
+      if (!f) return f.error();
+      std::vector<Vec3f> x = std::move(f->positions);
+      if (x.size() > n)
+        return input_error(fmt::format("{}: {} particles, more than the last frame's {}: particles were removed, a point "
+                                       "cache cannot follow",
+                                       frames[k].string(), x.size(), n));
+      for (std::size_t i = x.size(); i < n; ++i) x.push_back(last->positions[i]);
+      if (k == 0) {
+        io::ParticleFrameView v;
+        v.positions = x;
+        v.comment = "fluidform particles: frame-0 point mesh for particles.pc2 (Blender: Mesh Cache modifier, PC2)";
+        FF_CHECK(io::write_particles_ply(out / "particles_frame0.ply", v));
+      }
+      FF_CHECK(pc2.add(x));
+    }
+    FF_CHECK(pc2.finish());
+  }
+  sum.seconds = watch.seconds();
+  return sum;
+}
+
+}  // namespace ff::app
