@@ -9,6 +9,7 @@
 #include "io/scene.h"
 #include "sampling/control_io.h"
 #include "sampling/samplers.h"
+#include "surface/surface_params.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -119,11 +120,15 @@ struct MeshCliOptions {
   fs::path input, out;
   ff::app::MeshOptions mesh;
   bool no_glb = false, no_pc2 = false, no_frames = false, final_only = false, no_quantize = false;
+  std::string extraction = "mc";
 };
 
 int cmd_mesh(MeshCliOptions o) {
   o.mesh.glb = !o.no_glb, o.mesh.pc2 = !o.no_pc2, o.mesh.frame_objs = !o.no_frames, o.mesh.final_only = o.final_only;
   o.mesh.quantize = !o.no_quantize;
+  auto extraction = ff::surface::parse_extraction(o.extraction);
+  if (!extraction) return fail(ff::param_error("--extraction " + extraction.error().message));
+  o.mesh.params.extraction = *extraction;
   if (auto st = o.mesh.validate(); !st.ok()) return fail(st.error());
   auto frames = ff::app::particle_frames(o.input);
   if (!frames) return fail(frames.error());
@@ -132,9 +137,11 @@ int cmd_mesh(MeshCliOptions o) {
   auto sum = ff::app::export_meshes(*frames, o.out, o.mesh, bar);
   if (!sum) return fail(sum.error());
   spdlog::info("mesh: {} frame(s) meshed in {:.2f} s at spacing {:.4g} m; final.obj: {} triangles, {} vertices ({} from "
-               "marching cubes), {}, genus {}, {} component(s) -> {}",
+               "marching {}), {}, genus {}, {} component(s) -> {}",
                sum->frames_meshed, sum->seconds, sum->spacing, sum->final_triangles, sum->final_vertices,
-               sum->mc_triangles_final, sum->final_ok ? "watertight and manifold" : "NOT watertight/manifold",
+               sum->mc_triangles_final,
+               o.mesh.params.extraction == ff::surface::Extraction::MarchingTetrahedra ? "tetrahedra" : "cubes",
+               sum->final_ok ? "watertight and manifold" : "NOT watertight/manifold",
                sum->final_genus, sum->final_components, (o.out / "mesh" / "final.obj").string());
   return sum->final_ok ? 0 : fail(ff::numerical_error("mesh: the final mesh failed its checks"));
 }
@@ -196,6 +203,9 @@ int main(int argc, char** argv) {
   mesh->add_option("--triangles", mesh_opt.mesh.params.max_triangles, "triangle budget per mesh (0: none)")->capture_default_str();
   mesh->add_option("--cell", mesh_opt.mesh.params.cell_size, "grid cell size in spacings")->capture_default_str();
   mesh->add_option("--smoothing", mesh_opt.mesh.params.smoothing_passes, "smoothing passes (paper eq. 20-21)")->capture_default_str();
+  mesh->add_option("--extraction", mesh_opt.extraction,
+                   "iso-surface extraction: mc (marching cubes) or rmt (regularised marching tetrahedra)")
+      ->capture_default_str();
   mesh->add_option("--fps", mesh_opt.mesh.fps, "frames per second of the animation")->capture_default_str();
   mesh->add_flag("--no-glb", mesh_opt.no_glb, "do not write animation.glb");
   mesh->add_flag("--no-pc2", mesh_opt.no_pc2, "do not write particles.pc2 / particles_frame0.ply");

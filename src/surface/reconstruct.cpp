@@ -5,6 +5,7 @@
 #include "surface/components.h"
 #include "surface/decimate.h"
 #include "surface/marching_cubes.h"
+#include "surface/marching_tetrahedra.h"
 #include "surface/smooth.h"
 #include "surface/sparse_field.h"
 
@@ -29,7 +30,7 @@ Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spa
                                      particles[i].y(), particles[i].z()));
   const double d = spacing;
 
-  // --- field and marching cubes --------------------------------------------------------------------------------
+  // --- field and extraction (marching cubes, or the tetrahedra of RMT) -------------------------------------------
   core::Stopwatch watch;
   FF_TRY(SparseField field, sparse_field(particles, spacing, params));
   st.t_field = watch.seconds();
@@ -39,7 +40,8 @@ Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spa
   st.max_field = field.max_value;
 
   watch.restart();
-  FF_TRY(McMesh mc, marching_cubes(field));
+  const bool tetrahedra = params.extraction == Extraction::MarchingTetrahedra;
+  FF_TRY(McMesh mc, tetrahedra ? marching_tetrahedra(field) : marching_cubes(field));
   st.t_mc = watch.seconds();
   st.mc_vertices = mc.mesh.vertices.size();
   st.mc_triangles = mc.mesh.triangles.size();
@@ -65,7 +67,8 @@ Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spa
   MeshCheck check = check_mesh(mc.mesh);
   st.t_check += watch.seconds();
   if (!acceptable(check))
-    return numerical_error("surface: marching cubes produced a broken mesh (internal error): " + check.summary());
+    return numerical_error(fmt::format("surface: marching {} produced a broken mesh (internal error): {}",
+                                       tetrahedra ? "tetrahedra" : "cubes", check.summary()));
   io::TriangleMesh mesh = std::move(mc.mesh);
 
   // --- reduction, merged vertices put back onto the iso-surface ---------------------------------------------------

@@ -1,7 +1,9 @@
 #pragma once
 // Particles → editable mesh (paper §5.1, METHOD.md §a.7, §c.8, §c.9). The pipeline, one file per stage:
 //   sparse_field      φ on a sparse grid of cell d/2 (memory grows with the surface)
-//   marching_cubes    welded, watertight by construction (asymptotic decider on ambiguous faces)
+//   marching_cubes    welded, watertight by construction (asymptotic decider on ambiguous faces); or, with
+//                     SurfaceParams::extraction = MarchingTetrahedra, marching_tetrahedra (6 Kuhn tetrahedra per
+//                     cube, the extraction of RMT: the cluster_reduce stage then makes it Treece et al.'s RMT)
 //   components        tiny floating components and bubbles dropped (first: no work spent on spray)
 //   cluster_reduce    per-node vertex clustering (regularised-marching-tetrahedra style), merged vertices
 //                     projected back onto φ = iso
@@ -28,7 +30,7 @@ struct SurfaceStats {
   std::size_t surface_blocks = 0;    ///< blocks kept (the surface passes through them)
   std::size_t field_bytes = 0;       ///< memory of the kept blocks
   float max_field = 0.0f;            ///< max φ over the grid (below iso: no surface)
-  std::size_t mc_vertices = 0, mc_triangles = 0, mc_centres = 0;
+  std::size_t mc_vertices = 0, mc_triangles = 0, mc_centres = 0;  ///< of the extraction (cubes or tetrahedra)
   std::size_t removed_components = 0, removed_triangles = 0;
   std::size_t reduced_vertices = 0, reduced_triangles = 0;  ///< after cluster_reduce (= input when skipped)
   std::size_t clusters_merged = 0, clusters_undone = 0;
@@ -48,8 +50,8 @@ struct SurfaceStats {
 /// the particles are too sparse to make a surface (every component smaller than min_component_volume, or φ never
 /// reaches iso; see stats->max_field).
 /// Errors: Input for no particles or a non-finite coordinate (naming the first such particle); Param for a
-/// spacing that is not finite and > 0, invalid params or a cloud too large for the grid; Numerical if marching
-/// cubes itself fails the mesh check (an internal error).
+/// spacing that is not finite and > 0, invalid params or a cloud too large for the grid; Numerical if the
+/// extraction (marching cubes or tetrahedra) itself fails the mesh check (an internal error).
 Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params,
                                      SurfaceStats* stats = nullptr);
 

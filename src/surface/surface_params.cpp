@@ -6,6 +6,16 @@
 
 namespace ff::surface {
 
+std::string_view extraction_name(Extraction e) {
+  return e == Extraction::MarchingTetrahedra ? "rmt" : "mc";
+}
+
+Result<Extraction> parse_extraction(std::string_view name) {
+  if (name == "mc") return Extraction::MarchingCubes;
+  if (name == "rmt") return Extraction::MarchingTetrahedra;
+  return param_error(fmt::format("'{}' is not a surface extraction (mc or rmt)", name));
+}
+
 Status SurfaceParams::validate(std::string_view path) const {
   FF_CHECK(core::check_range(path, "cell_size", cell_size, 0.05, 4.0));
   FF_CHECK(core::check_range(path, "kernel_radius", kernel_radius, 0.5, 8.0));
@@ -25,6 +35,8 @@ Status SurfaceParams::validate(std::string_view path) const {
         fmt::format("{}.kernel_radius = {:g} d exceeds 8 cells ({:g} d): the sparse grid's blocks "
                     "see only their neighbours' particles",
                     path, kernel_radius, 8.0f * cell_size));
+  if (extraction != Extraction::MarchingCubes && extraction != Extraction::MarchingTetrahedra)
+    return param_error(fmt::format("{}.extraction is not a known extraction", path));
   if (reduction != Reduction::None && reduction != Reduction::Cluster)
     return param_error(fmt::format("{}.reduction is not a known reduction", path));
   return {};

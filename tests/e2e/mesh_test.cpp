@@ -127,6 +127,18 @@ TEST(MeshCommand, FramesGiveWatertightObjsAValidGlbAndAPointCache) {
   EXPECT_EQ(j["three"]["visible_at_end"], 1) << out;
   expect_no_temp_files(dir / "out");
 
+  // The same frames by regularised marching tetrahedra (--extraction rmt): as closed, and as close to the ball.
+  const auto rt = run({"mesh", dir.string(), "-o", (dir / "rmt").string(), "--final-only", "--extraction", "rmt"});
+  ASSERT_EQ(rt.code, 0) << rt.err;
+  EXPECT_NE(rt.err.find("from marching tetrahedra"), std::string::npos) << rt.err;
+  auto rfin = io::load_mesh(dir / "rmt" / "mesh" / "final.obj");
+  ASSERT_TRUE(rfin.has_value()) << rfin.error().message;
+  const auto rcheck = surface::check_mesh(*rfin);
+  EXPECT_TRUE(rcheck.ok()) << rcheck.summary();
+  EXPECT_EQ(rcheck.components, 1u);
+  EXPECT_EQ(rcheck.genus, 0);
+  for (const auto& v : rfin->vertices) EXPECT_NEAR((v - Vec3f(0.25f, 0.5f, 0.0f)).norm(), 0.3f, 0.5f * d);
+
   // Without the header's spacing it is estimated from the particles (a lattice: exactly d).
   fs::create_directories(dir / "bare");
   write_frame(dir / "bare" / "frame_00000.ply", ball(d, 0.3f, Vec3f::Zero()), "no spacing here");
@@ -161,6 +173,14 @@ TEST(MeshCommand, BadInputIsOneLineAndWritesNoMesh) {
   const auto bad_every = run({"-q", "mesh", (dir / "nan.ply").string(), "-o", (dir / "o4").string(), "--every", "0"});
   EXPECT_NE(bad_every.code, 0);
   EXPECT_EQ(count_lines(bad_every.err), 1u) << bad_every.err;
+
+  const auto bad_ex =
+      run({"-q", "mesh", (dir / "nan.ply").string(), "-o", (dir / "o5").string(), "--extraction", "mt"});
+  EXPECT_EQ(bad_ex.code, 2);
+  EXPECT_EQ(count_lines(bad_ex.err), 1u) << bad_ex.err;
+  EXPECT_NE(bad_ex.err.find("--extraction 'mt' is not a surface extraction (mc or rmt)"), std::string::npos)
+      << bad_ex.err;
+  EXPECT_FALSE(fs::exists(dir / "o5" / "mesh" / "final.obj"));
   expect_no_temp_files(dir);
 }
 

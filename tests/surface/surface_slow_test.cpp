@@ -76,6 +76,58 @@ TEST(SurfaceSlow, FilledBunnyGivesALightClosedMeshNearTheTarget) {
       st.total_seconds());
 }
 
+// Regularised marching tetrahedra (extraction = MarchingTetrahedra) on the same bunny: as closed and as close as the
+// marching-cubes path, and the regularisation's cut against plain marching cubes of the same field.
+TEST(SurfaceSlow, FilledBunnyByRmt) {
+  auto bunny = test::stanford_bunny();
+  ASSERT_TRUE(bunny.has_value()) << bunny.error().message;
+  io::TriangleMesh target = std::move(bunny).value();
+  const Aabb b = target.bounds();
+  const float scale = 1.0f / b.size().norm();
+  for (auto& v : target.vertices) v = (v - b.min) * scale;
+  auto field = sampling::MeshField::build(target);
+  ASSERT_TRUE(field.has_value());
+  const float d = 0.012f;
+  const std::vector<Vec3f> particles = sampling::voxel_samples(*field, d);
+
+  SurfaceParams rmt;
+  rmt.extraction = Extraction::MarchingTetrahedra;
+  SurfaceStats st;
+  auto mesh = reconstruct(particles, d, rmt, &st);
+  SurfaceParams raw = rmt;  // the regularised mesh itself
+  raw.smoothing_passes = 0;
+  raw.decimate_error = 0.0f;
+  raw.max_triangles = 0;
+  SurfaceStats rst;
+  auto regular = reconstruct(particles, d, raw, &rst);
+  SurfaceParams plain = raw;
+  plain.extraction = Extraction::MarchingCubes;
+  plain.reduction = Reduction::None;
+  auto mc = reconstruct(particles, d, plain);
+  ASSERT_TRUE(mesh.has_value() && regular.has_value() && mc.has_value());
+  const MeshCheck c = check_mesh(*mesh), rc = check_mesh(*regular);
+  EXPECT_TRUE(c.ok()) << c.summary();
+  EXPECT_TRUE(rc.ok()) << rc.summary();
+  EXPECT_EQ(c.components, 1u) << c.summary();
+  EXPECT_LE(mesh->triangles.size(), 20'000u);
+  EXPECT_FALSE(st.reduction_undone || st.smoothing_undone);
+  const Distances dm = to_target(*mc, *field, target), df = to_target(*mesh, *field, target),
+                  dr = to_target(*regular, *field, target);
+  // The bounds of the marching-cubes default above, and "equal" to plain marching cubes before decimation.
+  EXPECT_LE(df.mean, 0.25f * d);
+  EXPECT_LE(df.hausdorff, 1.5f * d);
+  EXPECT_LE(dr.hausdorff, dm.hausdorff + 0.01f * d);
+  EXPECT_LE(dr.mean, dm.mean + 0.005f * d);
+  EXPECT_LE(double(regular->triangles.size()), 0.8 * double(mc->triangles.size()));
+  std::printf(
+      "[ bunny RMT ] MC %zu triangles, Hausdorff %.3f d, mean %.3f d; tetrahedra %zu -> regularised %zu (%.2f of MC, "
+      "%zu cells merged, %zu undone), Hausdorff %.3f d, mean %.3f d; default (20k budget) %zu, Hausdorff %.3f d, "
+      "mean %.3f d; %.2f s\n",
+      mc->triangles.size(), dm.hausdorff / d, dm.mean / d, rst.mc_triangles, regular->triangles.size(),
+      double(regular->triangles.size()) / double(mc->triangles.size()), rst.clusters_merged, rst.clusters_undone,
+      dr.hausdorff / d, dr.mean / d, mesh->triangles.size(), df.hausdorff / d, df.mean / d, st.total_seconds());
+}
+
 TEST(SurfaceSlow, LargeSphereMeetsTheBudgetCleanly) {
   const float d = 0.1f, r = 30.0f * d;
   const Vec3f centre(0.037f, 0.011f, -0.023f);
