@@ -15,19 +15,23 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <regex>
+#include <string_view>
 
 namespace ff::app {
 namespace fs = std::filesystem;
 
 namespace {
 
-// frame_NNNNN.ply → NNNNN; −1 for other names.
+// frame_NNNNN.ply → NNNNN; −1 for other names. (By hand: GCC 12's <regex> trips -Wmaybe-uninitialized at -O1.)
 long frame_number(const fs::path& p) {
-  static const std::regex re(R"(frame_(\d+)\.ply)");
-  std::smatch m;
   const std::string name = p.filename().string();
-  return std::regex_match(name, m, re) ? std::stol(m[1].str()) : -1;
+  constexpr std::string_view head = "frame_", tail = ".ply";
+  if (name.size() <= head.size() + tail.size() || name.rfind(head, 0) != 0 ||
+      name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
+    return -1;
+  const std::string digits = name.substr(head.size(), name.size() - head.size() - tail.size());
+  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stol(digits);
 }
 
 // "spacing D" in a particle PLY's header comments (written by `run`), or 0.

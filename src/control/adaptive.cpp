@@ -21,6 +21,17 @@ inline __m128 same_target(const std::uint8_t* tf, const Index* j, std::uint8_t t
       _mm_setr_epi32(tf[j[0]] == t ? -1 : 0, tf[j[1]] == t ? -1 : 0, tf[j[2]] == t ? -1 : 0, tf[j[3]] == t ? -1 : 0));
 }
 
+// Four bonds of a particle from k (of its range ending at e): the missing ones repeat the first (masked by the
+// caller with first_lanes(left)).
+struct Bonds4 {
+  Index i[4];
+  Index left;
+};
+inline Bonds4 bonds4(const Index* idx, Index k, Index e) {
+  const Index left = e - k, i0 = idx[k];
+  return {{i0, left > 1 ? idx[k + 1] : i0, left > 2 ? idx[k + 2] : i0, left > 3 ? idx[k + 3] : i0}, left};
+}
+
 }  // namespace
 
 AdaptiveController::AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc)
@@ -292,9 +303,9 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     __m128 best = broadcast(INFINITY);
     __m128i best_i = _mm_set1_epi32(-1);
     for (Index k = b; k < e; k += 4) {
-      const Index left = e - k;
-      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
-                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      // Padding lanes repeat the first bond: a duplicate cannot change the minimum.
+      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
+      const Index i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
       const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
@@ -411,9 +422,8 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
     __m128 nx = zero, ny = zero, nz = zero, den = zero;
     // Four bonds at a time: Σ w f r and Σ w with w the Poly6 weight (its constant cancels in the ratio).
     for (Index k = b; k < e; k += 4) {
-      const Index left = e - k;
-      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
-                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
+      const Index left = g.left, i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
       const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
@@ -541,9 +551,8 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
     __m128 dx = zero, dy = zero, dz = zero;
     for (Index k = b; k < e; k += 4) {
-      const Index left = e - k;
-      const Index i0 = bond_idx_[k], i1 = left > 1 ? bond_idx_[k + 1] : i0, i2 = left > 2 ? bond_idx_[k + 2] : i0,
-                  i3 = left > 3 ? bond_idx_[k + 3] : i0;
+      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
+      const Index left = g.left, i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
       const __m128 c4 = _mm_and_ps(core::simd::gather(coef_.data(), i0, i1, i2, i3), core::simd::first_lanes(left));
       if (_mm_movemask_ps(_mm_cmpgt_ps(c4, zero)) == 0) continue;
       const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);

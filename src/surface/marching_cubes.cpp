@@ -31,15 +31,7 @@ Result<McMesh> marching_cubes(const SparseField& field) {
   const McTable& table = McTable::get();
 
   // Kept neighbours at +x, +y, +z and their combinations (index = dx + 2 dy + 4 dz), −1 when absent.
-  std::vector<std::array<std::int64_t, 8>> up(field.keys.size());
-  for_each_block(nb, [&](std::int64_t b) {
-    const auto c = field.block_coords(field.keys[std::size_t(b)]);
-    for (int s = 0; s < 8; ++s) {
-      const std::int64_t x = c[0] + (s & 1), y = c[1] + ((s >> 1) & 1), z = c[2] + ((s >> 2) & 1);
-      const bool inside = x < field.block_dims[0] && y < field.block_dims[1] && z < field.block_dims[2];
-      up[std::size_t(b)][s] = inside ? field.find(field.block_key(x, y, z)) : -1;
-    }
-  });
+  const std::vector<std::array<std::int64_t, 8>> up = field.upper_neighbors();
 
   // --- pass 1: which owned edges are crossed (edges from nodes [0, 8)³ of the block) -------------------------------
   std::vector<std::uint64_t> bits(field.keys.size() * kWords, 0);

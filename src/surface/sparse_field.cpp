@@ -17,6 +17,19 @@ std::int64_t SparseField::find(std::uint64_t key) const {
   return it != keys.end() && *it == key ? std::int64_t(it - keys.begin()) : -1;
 }
 
+std::vector<std::array<std::int64_t, 8>> SparseField::upper_neighbors() const {
+  std::vector<std::array<std::int64_t, 8>> up(keys.size());
+  for_each_block(std::int64_t(keys.size()), [&](std::int64_t b) {
+    const auto c = block_coords(keys[std::size_t(b)]);
+    for (int s = 0; s < 8; ++s) {
+      const std::int64_t x = c[0] + (s & 1), y = c[1] + ((s >> 1) & 1), z = c[2] + ((s >> 2) & 1);
+      const bool inside = x < block_dims[0] && y < block_dims[1] && z < block_dims[2];
+      up[std::size_t(b)][s] = inside ? find(block_key(x, y, z)) : -1;
+    }
+  });
+  return up;
+}
+
 std::size_t SparseField::bytes() const {
   std::size_t b = keys.capacity() * sizeof(std::uint64_t) + values.capacity() * sizeof(std::vector<float>);
   for (const auto& v : values) b += v.capacity() * sizeof(float);

@@ -66,6 +66,9 @@ struct SparseField {
   Vec3f project(const Vec3f& p) const;
   /// Bytes held by the kept blocks.
   std::size_t bytes() const;
+  /// Per kept block: the kept blocks at +x, +y, +z and their combinations (index dx + 2 dy + 4 dz; entry 0 is the
+  /// block itself), −1 where absent. The extractors read the nodes they share with those blocks.
+  std::vector<std::array<std::int64_t, 8>> upper_neighbors() const;
 };
 
 /// φ of `particles` (m) at fluid spacing `spacing` (d, m) with the field part of `params`.
