@@ -128,10 +128,10 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   }
 
   // The spacing: given, else from the last frame's header, else estimated from it.
+  auto last = io::read_particles_ply(frames.back());
+  if (!last) return last.error();
   float d = o.spacing;
   {
-    auto last = io::read_particles_ply(frames.back());
-    if (!last) return last.error();
     if (d == 0.0f) d = spacing_from_comments(*last);
     if (d == 0.0f) {
       auto est = estimate_spacing(last->positions);
@@ -210,8 +210,6 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     // Every particle frame, in order. Particles are written sorted by id, so entry i is the same particle in
     // every frame; a frame with fewer particles (an emitter still filling) is padded with the last frame's
     // positions of the missing ones.
-    auto last = io::read_particles_ply(frames.back());
-    if (!last) return last.error();
     const std::size_t n = last->positions.size();
     io::Pc2Writer pc2;
     FF_CHECK(pc2.open(out / "particles.pc2", n, 0.0f));

@@ -21,6 +21,13 @@ inline __m128 same_target(const std::uint8_t* tf, const Index* j, std::uint8_t t
       _mm_setr_epi32(tf[j[0]] == t ? -1 : 0, tf[j[1]] == t ? -1 : 0, tf[j[2]] == t ? -1 : 0, tf[j[3]] == t ? -1 : 0));
 }
 
+// |p − x_j|² for four fluid particles j (p broadcast in px, py, pz).
+inline __m128 dist2(const Vec3f* x, const Index* j, __m128 px, __m128 py, __m128 pz) {
+  const core::simd::V3 xj = core::simd::gather(x, j[0], j[1], j[2], j[3]);
+  const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+  return _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+}
+
 // Four bonds of a particle from k (of its range ending at e): the missing ones repeat the first (masked by the
 // caller with first_lanes(left)).
 struct Bonds4 {
@@ -201,9 +208,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
       __m128 sw = zero;
       core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
-        const V3 xj = core::simd::gather(x, j[0], j[1], j[2], j[3]);
-        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-        const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+        const __m128 r2 = dist2(x, j, px, py, pz);
         __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
         if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
         const __m128 q2 = _mm_sub_ps(h2, r2);
@@ -225,9 +230,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z()), hs = broadcast(hs2);
     std::size_t g = 0;
     core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
-      const V3 xj = core::simd::gather(x, j[0], j[1], j[2], j[3]);
-      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-      const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      const __m128 r2 = dist2(x, j, px, py, pz);
       __m128 use = _mm_and_ps(lanes, _mm_cmple_ps(r2, hs));
       if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       mask[g++] = static_cast<std::uint8_t>(_mm_movemask_ps(use));
@@ -468,9 +471,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
     const auto range = cf_.of(i);
     auto r2_of = [&](const Index* j) {
-      const V3 xj = core::simd::gather(xs, j[0], j[1], j[2], j[3]);
-      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
+      return dist2(xs, j, px, py, pz);
     };
     // Density first; the gradient sum (a square root per pair) only for the samples that are under-filled.
     __m128 sw = zero;

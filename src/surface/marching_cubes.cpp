@@ -1,6 +1,7 @@
 #include "surface/marching_cubes.h"
 
 #include "surface/block_loop.h"
+#include "surface/crossed_edges.h"
 #include "surface/mc_table.h"
 
 #include <fmt/format.h>
@@ -14,7 +15,7 @@ namespace ff::surface {
 namespace {
 
 constexpr int kB = SparseField::kBlockCells;
-constexpr int kWords = kB * kB * kB * 3 / 64;  // crossed-edge bits of one block: 1536 edges
+using Edges = CrossedEdges<3>;  // 1536 owned edges per block
 constexpr Index kCentreFlag = Index(1) << 31;  // marks a block-local centre id until the final numbering
 
 constexpr int node_edge(int i, int j, int k, int axis) { return ((k * kB + j) * kB + i) * 3 + axis; }
@@ -34,12 +35,10 @@ Result<McMesh> marching_cubes(const SparseField& field) {
   const std::vector<std::array<std::int64_t, 8>> up = field.upper_neighbors();
 
   // --- pass 1: which owned edges are crossed (edges from nodes [0, 8)³ of the block) -------------------------------
-  std::vector<std::uint64_t> bits(field.keys.size() * kWords, 0);
-  std::vector<std::uint16_t> rank(field.keys.size() * kWords, 0);  // crossed edges before each word
-  std::vector<std::uint32_t> count(field.keys.size(), 0);
+  Edges edges(field.keys.size());
   for_each_block(nb, [&](std::int64_t b) {
     const float* v = field.values[std::size_t(b)].data();
-    std::uint64_t* w = &bits[std::size_t(b) * kWords];
+    std::uint64_t* w = edges.block_bits(b);
     for (int k = 0; k < kB; ++k)
       for (int j = 0; j < kB; ++j)
         for (int i = 0; i < kB; ++i) {
@@ -49,54 +48,31 @@ Result<McMesh> marching_cubes(const SparseField& field) {
           for (int a = 0; a < 3; ++a)
             if (in0 != in[a]) {
               const int e = node_edge(i, j, k, a);
-              w[e / 64] |= std::uint64_t(1) << (e % 64);
+              Edges::mark(w, e);
             }
         }
-    std::uint32_t total = 0;
-    for (int q = 0; q < kWords; ++q) {
-      rank[std::size_t(b) * kWords + std::size_t(q)] = std::uint16_t(total);
-      total += std::uint32_t(std::popcount(w[q]));
-    }
-    count[std::size_t(b)] = total;
   });
-  std::vector<std::uint64_t> offset(field.keys.size() + 1, 0);
-  for (std::size_t b = 0; b < field.keys.size(); ++b) offset[b + 1] = offset[b] + count[b];
-  const std::uint64_t edge_vertices = offset.back();
+  const std::uint64_t edge_vertices = edges.index();
   if (edge_vertices >= kCentreFlag)
     return numerical_error(fmt::format("surface: {} marching-cubes vertices exceed 2^31", edge_vertices));
 
   McMesh out;
   out.mesh.vertices.resize(edge_vertices);
   out.cluster.resize(edge_vertices);
-  const auto nd = field.node_dims();
 
   // --- pass 1b: vertex positions and regularisation cells, in bit order -------------------------------------------
   for_each_block(nb, [&](std::int64_t b) {
     const float* v = field.values[std::size_t(b)].data();
-    const std::uint64_t* w = &bits[std::size_t(b) * kWords];
     const auto c = field.block_coords(field.keys[std::size_t(b)]);
-    std::uint64_t id = offset[std::size_t(b)];
-    for (int q = 0; q < kWords; ++q)
-      for (std::uint64_t word = w[q]; word; word &= word - 1) {
-        const int e = q * 64 + std::countr_zero(word);
-        const int a = e % 3, node = e / 3;
-        const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
-        int l1[3] = {l[0], l[1], l[2]};
-        ++l1[a];
-        const float v0 = v[SparseField::local(l[0], l[1], l[2])];
-        const float v1 = v[SparseField::local(l1[0], l1[1], l1[2])];
-        const float t = std::clamp((iso - v0) / (v1 - v0), 0.01f, 0.99f);
-        std::int64_t g[3];
-        Vec3d p;
-        for (int ax = 0; ax < 3; ++ax) {
-          g[ax] = c[ax] * kB + l[ax];
-          p[ax] = field.origin[ax] + field.cell * (double(g[ax]) + (ax == a ? double(t) : 0.0));
-        }
-        if (t >= 0.5f) ++g[a];  // the nearer node owns the vertex
-        out.mesh.vertices[id] = p.cast<float>();
-        out.cluster[id] = std::uint64_t((g[2] * nd[1] + g[1]) * nd[0] + g[0]);
-        ++id;
-      }
+    edges.for_each_crossed(b, [&](int e, std::uint64_t id) {
+      const int a = e % 3, node = e / 3;
+      const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
+      int step[3] = {0, 0, 0};
+      step[a] = 1;
+      place_edge_vertex(field, c, l, step, v[SparseField::local(l[0], l[1], l[2])],
+                        v[SparseField::local(l[0] + step[0], l[1] + step[1], l[2] + step[2])], out.mesh.vertices[id],
+                        out.cluster[id]);
+    });
   });
 
   // --- pass 2: triangles per block, vertices looked up in the owning block --------------------------------------
@@ -110,26 +86,13 @@ Result<McMesh> marching_cubes(const SparseField& field) {
     auto vertex_of = [&](int i, int j, int k, int e) -> Index {
       const CubeEdge ce = McTable::edge(e);
       int n[3] = {i + (ce.c0 & 1), j + ((ce.c0 >> 1) & 1), k + ((ce.c0 >> 2) & 1)};
-      int s = 0;
-      for (int a = 0; a < 3; ++a)
-        if (n[a] == kB) {
-          s |= 1 << a;
-          n[a] = 0;
-        }
-      const std::int64_t owner = up[std::size_t(b)][s];
-      if (owner < 0) {
+      const std::int64_t owner = owner_block(up[std::size_t(b)], n);
+      const std::int64_t id = owner < 0 ? -1 : edges.vertex(owner, node_edge(n[0], n[1], n[2], ce.axis));
+      if (id < 0) {
         broken = true;
         return 0;
       }
-      const int le = node_edge(n[0], n[1], n[2], ce.axis);
-      const std::uint64_t* w = &bits[std::size_t(owner) * kWords];
-      const std::uint64_t word = w[le / 64], below = word & ((std::uint64_t(1) << (le % 64)) - 1);
-      if (!((word >> (le % 64)) & 1)) {
-        broken = true;
-        return 0;
-      }
-      return Index(offset[std::size_t(owner)] + rank[std::size_t(owner) * kWords + std::size_t(le / 64)] +
-                   std::uint64_t(std::popcount(below)));
+      return Index(id);
     };
     for (int k = 0; k < kB; ++k)
       for (int j = 0; j < kB; ++j)

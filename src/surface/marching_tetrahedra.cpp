@@ -1,6 +1,7 @@
 #include "surface/marching_tetrahedra.h"
 
 #include "surface/block_loop.h"
+#include "surface/crossed_edges.h"
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -15,9 +16,7 @@ namespace {
 
 constexpr int kB = SparseField::kBlockCells;
 constexpr int kDirs = 7;                             // edges a node owns: s ∈ {0, 1}³ \ {0}, bit a = step along a
-constexpr int kWords = kB * kB * kB * kDirs / 64;    // crossed-edge bits of one block: 3584 edges
-static_assert(kB * kB * kB * kDirs % 64 == 0);
-static_assert(kB * kB * kB * kDirs < 65536);        // prefix counts fit the uint16 ranks
+using Edges = CrossedEdges<kDirs>;                    // 3584 owned edges per block
 
 // Edge s − 1 of own node (i, j, k) of a block.
 constexpr int node_edge(int i, int j, int k, int s) { return ((k * kB + j) * kB + i) * kDirs + (s - 1); }
@@ -110,12 +109,10 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
   const std::vector<std::array<std::int64_t, 8>> up = field.upper_neighbors();
 
   // --- pass 1: which owned edges are crossed (the 7 edges from each node [0, 8)³ of the block) ---------------------
-  std::vector<std::uint64_t> bits(field.keys.size() * kWords, 0);
-  std::vector<std::uint16_t> rank(field.keys.size() * kWords, 0);  // crossed edges before each word
-  std::vector<std::uint32_t> count(field.keys.size(), 0);
+  Edges edges(field.keys.size());
   for_each_block(nb, [&](std::int64_t b) {
     const float* v = field.values[std::size_t(b)].data();
-    std::uint64_t* w = &bits[std::size_t(b) * kWords];
+    std::uint64_t* w = edges.block_bits(b);
     for (int k = 0; k < kB; ++k)
       for (int j = 0; j < kB; ++j)
         for (int i = 0; i < kB; ++i) {
@@ -123,54 +120,30 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
           for (int s = 1; s < 8; ++s)
             if (in0 != (v[SparseField::local(i + (s & 1), j + ((s >> 1) & 1), k + ((s >> 2) & 1))] > iso)) {
               const int e = node_edge(i, j, k, s);
-              w[e / 64] |= std::uint64_t(1) << (e % 64);
+              Edges::mark(w, e);
             }
         }
-    std::uint32_t total = 0;
-    for (int q = 0; q < kWords; ++q) {
-      rank[std::size_t(b) * kWords + std::size_t(q)] = std::uint16_t(total);
-      total += std::uint32_t(std::popcount(w[q]));
-    }
-    count[std::size_t(b)] = total;
   });
-  std::vector<std::uint64_t> offset(field.keys.size() + 1, 0);
-  for (std::size_t b = 0; b < field.keys.size(); ++b) offset[b + 1] = offset[b] + count[b];
-  const std::uint64_t vertices = offset.back();
+  const std::uint64_t vertices = edges.index();
   if (vertices >= (std::uint64_t(1) << 31))
     return numerical_error(fmt::format("surface: {} marching-tetrahedra vertices exceed 2^31", vertices));
 
   McMesh out;
   out.mesh.vertices.resize(vertices);
   out.cluster.resize(vertices);
-  const auto nd = field.node_dims();
 
-  // --- pass 1b: vertex positions and regularisation cells, in bit order -------------------------------------------
+  // --- pass 1b: vertex positions and regularisation cells (Treece et al.'s nearer node), in bit order -------------
   for_each_block(nb, [&](std::int64_t b) {
     const float* v = field.values[std::size_t(b)].data();
-    const std::uint64_t* w = &bits[std::size_t(b) * kWords];
     const auto c = field.block_coords(field.keys[std::size_t(b)]);
-    std::uint64_t id = offset[std::size_t(b)];
-    for (int q = 0; q < kWords; ++q)
-      for (std::uint64_t word = w[q]; word; word &= word - 1) {
-        const int e = q * 64 + std::countr_zero(word);
-        const int s = e % kDirs + 1, node = e / kDirs;
-        const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
-        const int step[3] = {s & 1, (s >> 1) & 1, (s >> 2) & 1};
-        const float v0 = v[SparseField::local(l[0], l[1], l[2])];
-        const float v1 = v[SparseField::local(l[0] + step[0], l[1] + step[1], l[2] + step[2])];
-        const float t = std::clamp((iso - v0) / (v1 - v0), 0.01f, 0.99f);
-        std::int64_t g[3];
-        Vec3d p;
-        for (int ax = 0; ax < 3; ++ax) {
-          g[ax] = c[ax] * kB + l[ax];
-          p[ax] = field.origin[ax] + field.cell * (double(g[ax]) + (step[ax] ? double(t) : 0.0));
-        }
-        if (t >= 0.5f)  // the nearer node owns the vertex (Treece et al.'s cell)
-          for (int ax = 0; ax < 3; ++ax) g[ax] += step[ax];
-        out.mesh.vertices[id] = p.cast<float>();
-        out.cluster[id] = std::uint64_t((g[2] * nd[1] + g[1]) * nd[0] + g[0]);
-        ++id;
-      }
+    edges.for_each_crossed(b, [&](int e, std::uint64_t id) {
+      const int s = e % kDirs + 1, node = e / kDirs;
+      const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
+      const int step[3] = {s & 1, (s >> 1) & 1, (s >> 2) & 1};
+      place_edge_vertex(field, c, l, step, v[SparseField::local(l[0], l[1], l[2])],
+                        v[SparseField::local(l[0] + step[0], l[1] + step[1], l[2] + step[2])], out.mesh.vertices[id],
+                        out.cluster[id]);
+    });
   });
 
   // --- pass 2: triangles per block, vertices looked up in the owning block --------------------------------------
@@ -182,26 +155,13 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
     auto& bt = tris[std::size_t(b)];
     auto vertex_of = [&](int i, int j, int k, const TetEdge& te) -> Index {
       int n[3] = {i + (te.lo & 1), j + ((te.lo >> 1) & 1), k + ((te.lo >> 2) & 1)};
-      int s = 0;
-      for (int a = 0; a < 3; ++a)
-        if (n[a] == kB) {
-          s |= 1 << a;
-          n[a] = 0;
-        }
-      const std::int64_t owner = up[std::size_t(b)][s];
-      if (owner < 0) {
+      const std::int64_t owner = owner_block(up[std::size_t(b)], n);
+      const std::int64_t id = owner < 0 ? -1 : edges.vertex(owner, node_edge(n[0], n[1], n[2], te.dir));
+      if (id < 0) {
         broken = true;
         return 0;
       }
-      const int le = node_edge(n[0], n[1], n[2], te.dir);
-      const std::uint64_t word = bits[std::size_t(owner) * kWords + std::size_t(le / 64)];
-      if (!((word >> (le % 64)) & 1)) {
-        broken = true;
-        return 0;
-      }
-      const std::uint64_t below = word & ((std::uint64_t(1) << (le % 64)) - 1);
-      return Index(offset[std::size_t(owner)] + rank[std::size_t(owner) * kWords + std::size_t(le / 64)] +
-                   std::uint64_t(std::popcount(below)));
+      return Index(id);
     };
     for (int k = 0; k < kB; ++k)
       for (int j = 0; j < kB; ++j)

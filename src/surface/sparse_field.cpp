@@ -172,16 +172,7 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
   std::vector<std::uint64_t> candidates;
   candidates.reserve(bins.bin_key.size() * 8);
   for (const std::uint64_t key : bins.bin_key) {
-    const auto b = field.block_coords(key);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const std::int64_t x = b[0] + dx, y = b[1] + dy, z = b[2] + dz;
-          if (x < 0 || y < 0 || z < 0 || x >= field.block_dims[0] || y >= field.block_dims[1] ||
-              z >= field.block_dims[2])
-            continue;
-          candidates.push_back(field.block_key(x, y, z));
-        }
+    field.for_each_block_around(field.block_coords(key), [&](std::uint64_t k, int, int, int) { candidates.push_back(k); });
   }
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
@@ -205,16 +196,9 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
     std::array<float, SparseField::kNodesPerBlock> v{};
     const auto b = field.block_coords(candidates[std::size_t(c)]);
     // Neighbours in increasing key order (z, then y, then x): the one global particle order.
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const std::int64_t x = b[0] + dx, y = b[1] + dy, z = b[2] + dz;
-          if (x < 0 || y < 0 || z < 0 || x >= field.block_dims[0] || y >= field.block_dims[1] ||
-              z >= field.block_dims[2])
-            continue;
-          const std::uint64_t key = field.block_key(x, y, z);
+    field.for_each_block_around(b, [&](std::uint64_t key, int dx, int dy, int dz) {
           const auto it = std::lower_bound(bins.bin_key.begin(), bins.bin_key.end(), key);
-          if (it == bins.bin_key.end() || *it != key) continue;
+          if (it == bins.bin_key.end() || *it != key) return;
           const auto bin = std::size_t(it - bins.bin_key.begin());
           // Node l of this block is node (l − 8·d) of the home block.
           const int sx = kB * dx, sy = kB * dy, sz = kB * dz;
@@ -263,7 +247,7 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
               }
             }
           }
-        }
+        });
     for (float& x : v) x *= kw;
     bool any_in = false, any_out = false;
     float mx = 0.0f;

@@ -51,6 +51,18 @@ struct SparseField {
     const auto k = std::int64_t(key);
     return {k % block_dims[0], (k / block_dims[0]) % block_dims[1], k / (block_dims[0] * block_dims[1])};
   }
+  /// Calls f(key, dx, dy, dz) for the blocks b + (dx, dy, dz), d ∈ {−1, 0, 1}³, that lie in the grid (b itself
+  /// included), in increasing key order.
+  template <class F>
+  void for_each_block_around(const std::array<std::int64_t, 3>& b, F&& f) const {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const std::int64_t x = b[0] + dx, y = b[1] + dy, z = b[2] + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= block_dims[0] || y >= block_dims[1] || z >= block_dims[2]) continue;
+          f(block_key(x, y, z), dx, dy, dz);
+        }
+  }
   /// Index of the kept block with this key, or −1.
   std::int64_t find(std::uint64_t key) const;
   /// Global node count per axis (for node ids).

@@ -118,4 +118,19 @@ SurfaceDistances surface_distances(const io::TriangleMesh& mesh, const Sdf& sdf,
   return s;
 }
 
+AnalyticShape analytic_sphere(float d) {
+  const float r = 8.0f * d;
+  auto sdf = sphere_sdf(kShapeCentre, r);
+  return {"sphere", sdf, lattice_inside(sdf, kShapeCentre - Vec3f::Constant(r), kShapeCentre + Vec3f::Constant(r), d),
+          sphere_surface_points(kShapeCentre, r, 2000), 0};
+}
+
+AnalyticShape analytic_torus(float d) {
+  const float big = 8.0f * d, small = 3.5f * d;
+  auto sdf = torus_sdf(kShapeCentre, big, small);
+  const Vec3f ext(big + small, small, big + small);
+  return {"torus", sdf, lattice_inside(sdf, kShapeCentre - ext, kShapeCentre + ext, d),
+          torus_surface_points(kShapeCentre, big, small, 80, 25), 1};
+}
+
 }  // namespace ff::test

@@ -34,4 +34,18 @@ struct SurfaceDistances {
 };
 SurfaceDistances surface_distances(const io::TriangleMesh& mesh, const Sdf& sdf, const std::vector<Vec3f>& truth);
 
+/// A test shape: lattice particles at spacing d inside it, its SDF, points on its true surface, its genus.
+struct AnalyticShape {
+  const char* name;
+  Sdf sdf;
+  std::vector<Vec3f> particles;
+  std::vector<Vec3f> truth;  // points on the true surface
+  int genus;
+};
+/// Centre of the analytic shapes: off the lattice, so that they do not line up with it.
+inline const Vec3f kShapeCentre(0.037f, 0.011f, -0.023f);
+/// The sphere (radius 8 d) and torus (8 d around, 3.5 d tube) of the surface tests, at kShapeCentre.
+AnalyticShape analytic_sphere(float d);
+AnalyticShape analytic_torus(float d);
+
 }  // namespace ff::test

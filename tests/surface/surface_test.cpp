@@ -171,31 +171,10 @@ TEST(ClusterReduce, RandomFieldsStayClosedAndManifold) {
 // --- the pipeline on analytic shapes
 // ----------------------------------------------------------------------------------
 
-struct Shape {
-  const char* name;
-  test::Sdf sdf;
-  std::vector<Vec3f> particles;
-  std::vector<Vec3f> truth;  // points on the true surface
-  int genus;
-};
-
-// Centres off the lattice, so the shapes do not line up with it.
-const Vec3f kCentre(0.037f, 0.011f, -0.023f);
-
-Shape sphere_shape() {
-  const float r = 8.0f * kD;
-  auto sdf = test::sphere_sdf(kCentre, r);
-  return {"sphere", sdf, test::lattice_inside(sdf, kCentre - Vec3f::Constant(r), kCentre + Vec3f::Constant(r), kD),
-          test::sphere_surface_points(kCentre, r, 2000), 0};
-}
-
-Shape torus_shape() {
-  const float big = 8.0f * kD, small = 3.5f * kD;
-  auto sdf = test::torus_sdf(kCentre, big, small);
-  const Vec3f ext(big + small, small, big + small);
-  return {"torus", sdf, test::lattice_inside(sdf, kCentre - ext, kCentre + ext, kD),
-          test::torus_surface_points(kCentre, big, small, 80, 25), 1};
-}
+using Shape = test::AnalyticShape;
+const Vec3f kCentre = test::kShapeCentre;
+Shape sphere_shape() { return test::analytic_sphere(kD); }
+Shape torus_shape() { return test::analytic_torus(kD); }
 
 SurfaceParams plain_mc() {
   SurfaceParams p;

@@ -1,0 +1,99 @@
+#pragma once
+// The bookkeeping marching cubes (3 owned edges per node) and marching tetrahedra (7) share: which owned grid edges
+// of each kept block φ crosses, one bit per edge, and the welded vertex of each. A vertex's index is its block's
+// offset plus the crossed edges before it in the block's bit order, so every cell that uses an edge finds the same
+// vertex without a hash map, and the order (hence the mesh) does not depend on the thread count.
+#include "surface/block_loop.h"
+#include "surface/sparse_field.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+namespace ff::surface {
+
+template <int kEdgesPerNode>
+struct CrossedEdges {
+  static constexpr int kB = SparseField::kBlockCells;
+  static constexpr int kWords = kB * kB * kB * kEdgesPerNode / 64;
+  static_assert(kB * kB * kB * kEdgesPerNode % 64 == 0);
+  static_assert(kB * kB * kB * kEdgesPerNode < 65536);  // prefix counts fit the uint16 ranks
+
+  std::vector<std::uint64_t> bits;    // per block: kWords words of crossed-edge bits
+  std::vector<std::uint16_t> rank;    // per block and word: crossed edges before the word
+  std::vector<std::uint64_t> offset;  // per block: index of its first vertex; offset.back() = vertex count
+
+  explicit CrossedEdges(std::size_t blocks) : bits(blocks * kWords, 0), rank(blocks * kWords, 0), offset(blocks + 1, 0) {}
+
+  std::uint64_t* block_bits(std::int64_t b) { return &bits[std::size_t(b) * kWords]; }
+  static void mark(std::uint64_t* w, int e) { w[e / 64] |= std::uint64_t(1) << (e % 64); }
+
+  /// Once every block's bits are set: the ranks and offsets. Returns the number of vertices.
+  std::uint64_t index() {
+    const auto nb = std::int64_t(offset.size() - 1);
+    std::vector<std::uint32_t> count(offset.size() - 1, 0);
+    for_each_block(nb, [&](std::int64_t b) {
+      std::uint32_t total = 0;
+      for (int q = 0; q < kWords; ++q) {
+        rank[std::size_t(b) * kWords + std::size_t(q)] = std::uint16_t(total);
+        total += std::uint32_t(std::popcount(bits[std::size_t(b) * kWords + std::size_t(q)]));
+      }
+      count[std::size_t(b)] = total;
+    });
+    for (std::size_t b = 0; b + 1 < offset.size(); ++b) offset[b + 1] = offset[b] + count[b];
+    return offset.back();
+  }
+
+  /// Calls f(e, id) for every crossed edge e of block b, in bit order, with its vertex index.
+  template <class F>
+  void for_each_crossed(std::int64_t b, F&& f) const {
+    const std::uint64_t* w = &bits[std::size_t(b) * kWords];
+    std::uint64_t id = offset[std::size_t(b)];
+    for (int q = 0; q < kWords; ++q)
+      for (std::uint64_t word = w[q]; word; word &= word - 1) f(q * 64 + std::countr_zero(word), id++);
+  }
+
+  /// The vertex on edge e of block `owner`, or −1 when that edge is not crossed.
+  std::int64_t vertex(std::int64_t owner, int e) const {
+    const std::uint64_t word = bits[std::size_t(owner) * kWords + std::size_t(e / 64)];
+    if (!((word >> (e % 64)) & 1)) return -1;
+    const std::uint64_t below = word & ((std::uint64_t(1) << (e % 64)) - 1);
+    return std::int64_t(offset[std::size_t(owner)] + rank[std::size_t(owner) * kWords + std::size_t(e / 64)] +
+                        std::uint64_t(std::popcount(below)));
+  }
+};
+
+/// The block that owns node n of block b's cells (a coordinate may be kB: the node is then the first of the next
+/// block): n is wrapped into that block, whose index is returned (−1 when it was not kept).
+inline std::int64_t owner_block(const std::array<std::int64_t, 8>& up, int n[3]) {
+  int s = 0;
+  for (int a = 0; a < 3; ++a)
+    if (n[a] == SparseField::kBlockCells) {
+      s |= 1 << a;
+      n[a] = 0;
+    }
+  return up[s];
+}
+
+/// Where φ crosses iso on the grid edge from local node l of the block at block coordinates c to l + step
+/// (step ∈ {0, 1}³): the position, kept 1 % of the edge away from either node, and the global id of the nearer
+/// node (the vertex's regularisation cell).
+inline void place_edge_vertex(const SparseField& f, const std::array<std::int64_t, 3>& c, const int l[3],
+                              const int step[3], float v0, float v1, Vec3f& position, std::uint64_t& cell) {
+  const float t = std::clamp((f.iso - v0) / (v1 - v0), 0.01f, 0.99f);
+  const auto nd = f.node_dims();
+  std::int64_t g[3];
+  Vec3d p;
+  for (int ax = 0; ax < 3; ++ax) {
+    g[ax] = c[ax] * SparseField::kBlockCells + l[ax];
+    p[ax] = f.origin[ax] + f.cell * (double(g[ax]) + (step[ax] ? double(t) : 0.0));
+  }
+  if (t >= 0.5f)  // the nearer node owns the vertex
+    for (int ax = 0; ax < 3; ++ax) g[ax] += step[ax];
+  position = p.cast<float>();
+  cell = std::uint64_t((g[2] * nd[1] + g[1]) * nd[0] + g[0]);
+}
+
+}  // namespace ff::surface
