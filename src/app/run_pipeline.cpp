@@ -385,7 +385,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
 
   sim::PbfSolver solver(scene.solver, scene.domain);
   control::ControlContext ctx{scene.solver.particle_radius, solver.particle_mass(), scene.solver.rest_density,
-                              scene.solver.gravity, scene.domain};
+                              scene.solver.gravity, scene.domain, scene.solver.support()};
   // A scene without targets has nothing to control: plain PBF whatever the controller setting.
   control::ControllerSpec spec = scene.controller;
   if (controls.empty()) spec.name = "none";
@@ -406,6 +406,8 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     for (const auto& r : rows) peak = std::max(peak, r.peak_memory_mib);
     json t = {{"particles", particles.size()},
               {"control_particles", control_count},
+              // Particles a controller added during the run (lcat's temporaries); 0 for every other controller.
+              {"added_particles", rows.empty() ? 0 : particles.size() - rows.front().particles},
               {"controller", std::string(controller->name())},
               {"frames", rows.empty() ? 0 : rows.back().frame},
               {"simulated_seconds", rows.empty() ? 0.0 : rows.back().time},

@@ -48,54 +48,23 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
                                                                         const ControlContext& ctx,
                                                                         const AdaptiveParams& params) {
   FF_CHECK(params.validate());
-  if (targets.empty()) return param_error("controller adaptive: the scene has no targets");
-  if (targets.size() > 250) return param_error(fmt::format("controller adaptive: {} targets, at most 250", targets.size()));
-  float hc = 0.0f;
-  for (const auto& t : targets) {
-    if (!t.set.consistent() || t.set.size() == 0 || !(t.set.support > 0.0f) || !(t.set.mass > 0.0f))
-      return param_error(fmt::format("controller adaptive: target {} has no weighted control samples", t.set.target));
-    if (hc > 0.0f && std::abs(t.set.support - hc) > 1e-4f * hc)
-      return param_error(fmt::format("controller adaptive: targets have different control supports ({} m and {} m); "
-                                     "sample them at one spacing", hc, t.set.support));
-    hc = std::max(hc, t.set.support);
-  }
-  std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, hc));
-  for (std::size_t t = 0; t < targets.size(); ++t) {
-    c->start_.push_back(targets[t].start);
-    FF_CHECK(targets[t].motion.validate(fmt::format("targets[{}]", t)));
-    c->motion_.push_back(targets[t].motion);
-    c->moving_ = c->moving_ || targets[t].motion.moving();
-    std::vector<Phase> phases;
-    phases.push_back({-INFINITY, std::move(targets[t].set)});
-    double last = -INFINITY;
-    for (auto& [time, set] : targets[t].swaps) {
-      if (!(time > last) || !std::isfinite(time))
-        return param_error(fmt::format("targets[{}]: mesh swaps must come at increasing, finite times", t));
-      if (!set.consistent() || set.size() == 0 || std::abs(set.support - hc) > 1e-4f * hc || !(set.mass > 0.0f))
-        return param_error(fmt::format("targets[{}]: a swapped-in mesh has no control samples at the target's support", t));
-      last = time;
-      phases.push_back({time, std::move(set)});
-    }
-    c->phases_.push_back(std::move(phases));
-  }
-  c->current_.assign(targets.size(), 0);
-  const float d = ctx.spacing(), mp = ctx.particle_mass;
-  // ε_c = epsilon · S_0, S_0 = Σ_j |g_j|² over a full resting lattice neighbourhood, g_j = (m_p/ρ_ref) ∇W(k d, H_c)
-  // with ρ_ref the lattice's kernel-sum density at H_c: what a filled interior sample sees (METHOD §a.3).
-  const double rho_ref = sampling::lattice_density(d, hc, ctx.rest_density);
-  const int reach = static_cast<int>(std::ceil(hc / d));
-  double s0 = 0.0;
-  for (int k = -reach; k <= reach; ++k)
-    for (int j = -reach; j <= reach; ++j)
-      for (int i = -reach; i <= reach; ++i) {
-        if (!(i || j || k)) continue;
-        s0 += ((mp / rho_ref) * c->spiky_.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
-      }
+  FF_TRY(CheckedTargets checked, check_targets(std::move(targets), "adaptive"));
+  std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, checked.hc));
+  c->start_ = std::move(checked.start);
+  c->motion_ = std::move(checked.motion);
+  c->moving_ = checked.moving;
+  c->phases_ = std::move(checked.phases);
+  c->current_.assign(c->phases_.size(), 0);
+  const float d = ctx.spacing();
+  // ε_c = epsilon · S_0 with ρ_ref the lattice's kernel-sum density at H_c: what a filled interior sample sees
+  // (METHOD §a.3).
+  const double rho_ref = sampling::lattice_density(d, c->hc_, ctx.rest_density);
+  const double s0 = full_gradient_sum(d, c->hc_, ctx.particle_mass, rho_ref);
   c->eps_c_ = static_cast<float>(params.epsilon * s0);
   c->flatten();
   // The gather field covers the domain at the control support (coarser on a huge domain).
-  c->seed_field_.resize(targets.size());
-  for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, hc);
+  c->seed_field_.resize(c->phases_.size());
+  for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, c->hc_);
   return c;
 }
 

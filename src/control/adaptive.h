@@ -17,6 +17,7 @@
 // sample order), so a run is bit-identical for any thread count.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
+#include "control/control_targets.h"
 #include "control/nearest_seed_field.h"
 #include "control/target_motion.h"
 #include "core/kernels.h"
@@ -27,15 +28,6 @@
 #include <vector>
 
 namespace ff::control {
-
-/// One target as the controllers see it: its samples (weights computed) and when it starts to act.
-struct ControlTarget {
-  sampling::ControlSet set;  ///< samples in the rest pose
-  double start = 0.0;        ///< s; before this the target attracts nothing
-  TargetMotion motion;       ///< keyframes (none: static)
-  /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
-  std::vector<std::pair<double, sampling::ControlSet>> swaps;
-};
 
 class AdaptiveController final : public sim::Controller {
  public:
@@ -78,11 +70,7 @@ class AdaptiveController final : public sim::Controller {
   bool moving_ = false;
   void move_targets(double time);
   void flatten();
-  struct Phase {
-    double time;
-    sampling::ControlSet set;
-  };
-  std::vector<std::vector<Phase>> phases_;  // per target: its sample sets in time order
+  std::vector<std::vector<TargetPhase>> phases_;  // per target: its sample sets in time order
   std::vector<std::size_t> current_;        // per target: the phase in use
 
   // Per sub-step.

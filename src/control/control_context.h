@@ -11,7 +11,9 @@ struct ControlContext {
   float rest_density = 1000.0f;    ///< physical ρ0, kg/m³ (the control densities are calibrated to it)
   Vec3f gravity{0.0f, -10.0f, 0.0f};
   sim::Domain domain;
+  float fluid_support = 0.0f;      ///< H_p, m (0: the default 2 d)
   float spacing() const { return 2.0f * particle_radius; }
+  float support() const { return fluid_support > 0.0f ? fluid_support : 2.0f * spacing(); }
 };
 
 }  // namespace ff::control

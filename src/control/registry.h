@@ -4,6 +4,11 @@
 #include "control/adaptive.h"
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
+#include "control/lcat.h"
+#include "control/pbfc.h"
+#include "control/rscf.h"
+#include "control/thuerey.h"
+#include "control/weighted.h"
 #include "sim/controller.h"
 
 #include <memory>
@@ -18,6 +23,11 @@ namespace ff::control {
 struct ControllerSpec {
   std::string name = "adaptive";  ///< a registry name; "none" runs plain PBF
   AdaptiveParams adaptive;
+  ThuereyParams thuerey;
+  PbfcParams pbfc;
+  WeightedParams weighted;
+  RscfParams rscf;
+  LcatParams lcat;
   Status validate(std::string_view path = "controller") const;
 };
 

@@ -209,6 +209,21 @@ Status read_sampling(const json& j, sampling::SamplingParams& p) {
   return o.finish();
 }
 
+/// A baseline's parameter object ("controller": {"pbfc": {...}}): every field its struct lists, unknown keys refused.
+template <class P>
+Status read_fields(JsonObject& parent, std::string_view key, P& params) {
+  const json* j = parent.child(key);
+  if (!j) return {};
+  JsonObject o(*j, fmt::format("controller.{}", key));
+  FF_CHECK(o.check_object());
+  Status st;
+  P::fields(params, [&](std::string_view k, float& v, double, double) {
+    if (st.ok()) st = o.get(k, v);
+  });
+  FF_CHECK(st);
+  return o.finish();
+}
+
 Status read_controller(const json& j, control::ControllerSpec& c) {
   JsonObject o(j, "controller");
   FF_CHECK(o.check_object());
@@ -242,6 +257,11 @@ Status read_controller(const json& j, control::ControllerSpec& c) {
     FF_CHECK(ao.get("gather_time", p.gather_time));
     FF_CHECK(ao.finish());
   }
+  FF_CHECK(read_fields(o, "thuerey", c.thuerey));
+  FF_CHECK(read_fields(o, "pbfc", c.pbfc));
+  FF_CHECK(read_fields(o, "weighted", c.weighted));
+  FF_CHECK(read_fields(o, "rscf", c.rscf));
+  FF_CHECK(read_fields(o, "lcat", c.lcat));
   return o.finish();
 }
 

@@ -20,8 +20,10 @@ struct StepView {
 
 /// A shape-control method. Per sub-step the solver calls, in this order (METHOD.md §a.6):
 ///   begin_step → add_accelerations → [predict x*] → N × { correct_positions; PBF iteration; walls } → end_step
+///   → emit
 /// Hooks may write only: acceleration, predicted, shift (the part of a correction that is not to become
-/// velocity), bound_control. They never resize the ParticleSet.
+/// velocity), bound_control. Only emit may add particles (ParticleSet::push_back, between sub-steps: the next
+/// sub-step sizes every array and searches again); particles are never removed.
 class Controller {
  public:
   virtual ~Controller() = default;
@@ -30,6 +32,7 @@ class Controller {
   virtual void add_accelerations(const StepView&, ParticleSet&) {}  ///< m/s², added in place
   virtual void correct_positions(const StepView&, ParticleSet&) {}  ///< metres, added to `predicted`
   virtual void end_step(const StepView&, const ParticleSet&) {}
+  virtual void emit(const StepView&, ParticleSet&) {}  ///< may append particles (LCAT's temporaries)
 };
 
 /// Plain PBF: no control (the `none` entry of the controller registry builds on this).

@@ -394,6 +394,7 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
     core::ScopedTimer t(times.control);
     view.iteration = -1;
     controller.end_step(view, p);
+    controller.emit(view, p);
   }
 }
 
@@ -423,7 +424,7 @@ Result<FrameStats> PbfSolver::advance(ParticleSet& p, double time, double frame_
     return bad;
   };
   auto any_bad = [&]() {
-    return core::deterministic_max(n, 0.0, [&](std::int64_t i) {
+    return core::deterministic_max(static_cast<std::int64_t>(p.size()), 0.0, [&](std::int64_t i) {
       const auto k = static_cast<std::size_t>(i);
       return p.position[k].allFinite() && p.velocity[k].allFinite() ? 0.0 : 1.0;
     }) > 0.0;
@@ -439,16 +440,17 @@ Result<FrameStats> PbfSolver::advance(ParticleSet& p, double time, double frame_
   }
   stats.substeps = steps;
   stats.dt = dt;
+  const auto m = static_cast<std::int64_t>(p.size());  // a controller may have added particles (Controller::emit)
 
   // Density error at the end of the frame, from the densities of the last iteration.
   const float rho0 = rho0_;
-  stats.density_error_mean = n ? core::deterministic_sum(n, [&](std::int64_t i) {
+  stats.density_error_mean = m ? core::deterministic_sum(m, [&](std::int64_t i) {
     return static_cast<double>(density_constraint(p.density[static_cast<std::size_t>(i)], rho0));
-  }) / double(n) : 0.0;
-  stats.density_error_max = core::deterministic_max(n, 0.0, [&](std::int64_t i) {
+  }) / double(m) : 0.0;
+  stats.density_error_max = core::deterministic_max(m, 0.0, [&](std::int64_t i) {
     return static_cast<double>(density_constraint(p.density[static_cast<std::size_t>(i)], rho0));
   });
-  stats.max_speed = std::sqrt(core::deterministic_max(n, 0.0, [&](std::int64_t i) {
+  stats.max_speed = std::sqrt(core::deterministic_max(m, 0.0, [&](std::int64_t i) {
     return static_cast<double>(p.velocity[static_cast<std::size_t>(i)].squaredNorm());
   }));
   return stats;

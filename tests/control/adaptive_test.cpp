@@ -1,5 +1,6 @@
 // The adaptive controller (METHOD.md §a.2–§a.6) on a small sphere target: it forms the shape where plain PBF
 // does not, it is deterministic for any thread count, and its parameters and registry reject bad input.
+#include "control/control_cases.h"
 #include "control/registry.h"
 #include "metrics/shape_metrics.h"
 #include "sampling/samplers.h"
@@ -15,76 +16,17 @@
 namespace ff {
 namespace {
 
-struct Case {
-  io::TriangleMesh mesh;
-  sampling::ControlSet set;
-  sim::SolverParams sp;
-  sim::Domain dom;
-  std::vector<sim::FluidSource> fluid;
-};
+using test::Case;
+using test::sphere_case;
 
-// A sphere of radius 0.25 m floating 0.2 m above the floor, d = 0.05 m (~520 samples), and a column of the
-// same volume standing on top of it (the layout the app makes for a scene of only a target).
-Case sphere_case() {
-  Case c;
-  c.mesh = test::translate(test::uv_sphere(0.25f, 32), Vec3f(0.0f, 0.45f, 0.0f));
-  c.sp.particle_radius = 0.025f;
-  sampling::SamplingParams smp;
-  smp.spacing = c.sp.spacing();
-  smp.method = sampling::Method::Voxel;
-  auto set = sampling::sample_target(c.mesh, smp);
-  EXPECT_TRUE(set.has_value()) << (set ? "" : set.error().message);
-  c.set = std::move(*set);
-  c.dom = {Vec3f(-0.6f, 0.0f, -0.6f), Vec3f(0.6f, 1.6f, 0.6f)};
-  const float side = 0.3f, h = static_cast<float>(4.0 / 3.0 * 3.14159265 * 0.25 * 0.25 * 0.25 / (side * side));
-  sim::FluidSource src;
-  src.min = Vec3f(-0.5f * side, 0.75f, -0.5f * side);
-  src.max = Vec3f(0.5f * side, 0.75f + h, 0.5f * side);
-  c.fluid.push_back(src);
-  return c;
-}
-
-struct Outcome {
-  metrics::FrameMetrics m;
-  std::vector<Vec3f> x;
-};
-
-Outcome simulate(const Case& c, const std::string& controller, int frames, const control::AdaptiveParams& ap = {},
-                 const control::TargetMotion& motion = {},
-                 const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
-                 const Case* measure_against = nullptr) {
-  sim::ParticleSet p;
-  EXPECT_TRUE(sim::fill_sources(c.fluid, c.dom, c.sp.particle_radius, p).ok());
-  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
-  sim::PbfSolver solver(c.sp, c.dom);
+test::Outcome simulate(const Case& c, const std::string& controller, int frames, const control::AdaptiveParams& ap = {},
+                       const control::TargetMotion& motion = {},
+                       const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
+                       const Case* measure_against = nullptr) {
   control::ControllerSpec spec;
   spec.name = controller;
   spec.adaptive = ap;
-  control::ControlContext ctx{c.sp.particle_radius, solver.particle_mass(), c.sp.rest_density, c.sp.gravity, c.dom};
-  std::vector<control::ControlTarget> targets(1);
-  targets[0].set = c.set;
-  targets[0].motion = motion;
-  targets[0].swaps = swaps;
-  auto ctl = control::make_controller(spec, std::move(targets), ctx);
-  EXPECT_TRUE(ctl.has_value()) << (ctl ? "" : ctl.error().message);
-  for (int f = 0; f < frames; ++f) {
-    auto st = solver.advance(p, f / 60.0, 1.0 / 60.0, **ctl);
-    EXPECT_TRUE(st.has_value()) << (st ? "" : st.error().message);
-    if (!st) break;
-  }
-  const Case& m = measure_against ? *measure_against : c;
-  auto shape = metrics::TargetShape::build(m.mesh, m.set.position, m.set.spacing);
-  EXPECT_TRUE(shape.has_value());
-  std::vector<std::uint8_t> controlled(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
-  Outcome o;
-  const control::Pose pose = motion.at(frames / 60.0);
-  o.m = metrics::measure(*shape, 0, p.position, p.target, controlled, c.sp.particle_radius, pose.rest_from_world(),
-                         pose.scale);
-  std::vector<Vec3f> v;
-  std::vector<std::uint8_t> t;
-  sim::sorted_by_id(p, o.x, v, t);
-  return o;
+  return test::simulate(c, spec, frames, motion, swaps, measure_against);
 }
 
 TEST(Adaptive, FormsASphereThatPlainPbfDoesNot) {

@@ -1,0 +1,71 @@
+#pragma once
+// What the baselines (METHOD.md §b) share: every target's control samples flattened into SoA arrays, kept at
+// the targets' current pose (keyframed motion, mesh swaps), their velocities u_c, and the sample ↔ fluid pairs
+// within a radius, found once per sub-step. The baselines run in the same harness as `adaptive` (same samples,
+// same solver, same per-target rule: a fluid particle only feels the samples of its own target, and only once
+// that target has started), so the table compares control laws and nothing else.
+#include "control/control_targets.h"
+#include "control/control_context.h"
+#include "core/neighbor_grid.h"
+#include "core/params.h"
+#include "sim/particle_set.h"
+
+#include <string_view>
+#include <vector>
+
+namespace ff::control {
+
+class BaselineCore {
+ public:
+  /// Checks the targets as `adaptive` does (samples present, one support H_c); `who` names the controller.
+  Status init(std::vector<ControlTarget> targets, const ControlContext& ctx, std::string_view who);
+
+  /// Moves the samples to their pose at `time` (u_c from the pose at time + dt) and applies mesh swaps.
+  /// True when a swap changed the sample set (indices of the previous set are then invalid).
+  bool update(double time, float dt);
+  /// Sample → fluid pairs within r (`sf`), on the fluid positions x; r ≤ the radius given to init.
+  void sample_to_fluid(const sim::ParticleSet& p, float r);
+  /// Fluid → sample pairs within r (`fs`), on the fluid positions x.
+  void fluid_to_sample(const sim::ParticleSet& p, float r);
+
+  /// Whether fluid particle j (target tj) and sample i interact: same target, and the target has started.
+  bool pairs(std::uint8_t tj, Index i) const { return tc[i] == tj && live[tj]; }
+  bool live_target(std::uint8_t t) const { return t < live.size() && live[t]; }
+
+  ControlContext ctx;
+  float hc = 0.0f;   ///< H_c, the samples' support (the same for every target)
+  float d = 0.0f;    ///< fluid spacing
+  // Flattened samples of every target's current phase (index = bound_control's "flattened index").
+  std::vector<Vec3f> xc, uc;     ///< position, velocity (0 for a static target)
+  std::vector<float> rho_c;      ///< ρ_c,i (eq. 9)
+  std::vector<std::uint8_t> tc;  ///< target of each sample
+  std::vector<float> mass_c;     ///< m_c per target
+  std::vector<std::uint8_t> live;  ///< per target: started at the current time
+  core::NeighborList sf, fs;
+  double time = 0.0;
+
+ private:
+  void flatten();
+  std::vector<std::vector<TargetPhase>> phases_;
+  std::vector<std::size_t> current_;
+  std::vector<double> start_;
+  std::vector<TargetMotion> motion_;
+  bool moving_ = false;
+  std::vector<Vec3f> rest_;
+  core::NeighborGrid fluid_grid_{1.0f}, sample_grid_{1.0f};
+  bool sample_grid_valid_ = false;
+};
+
+/// A baseline's parameters are read from the scene by name ("controller": {"pbfc": {"alpha": 1}}) and checked
+/// against their ranges through one list per struct: `P::fields(self, f)` calls f(key, value&, lo, hi) for every
+/// field (closed ranges). The first value outside its range (or not finite) is an error naming `path.key`.
+template <class P>
+Status validate_fields(const P& params, std::string_view path) {
+  Status st;
+  P::fields(params, [&](std::string_view key, const auto& v, double lo, double hi) {
+    if (st.ok()) st = core::check_range(path, key, static_cast<double>(v), lo, hi);
+  });
+  return st;
+}
+
+}  // namespace ff::control

@@ -1,0 +1,57 @@
+#include "control/control_targets.h"
+
+#include "core/kernels.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace ff::control {
+
+Result<CheckedTargets> check_targets(std::vector<ControlTarget> targets, std::string_view who) {
+  CheckedTargets c;
+  if (targets.empty()) return param_error(fmt::format("controller {}: the scene has no targets", who));
+  if (targets.size() > 250) return param_error(fmt::format("controller {}: {} targets, at most 250", who, targets.size()));
+  for (const auto& t : targets) {
+    if (!t.set.consistent() || t.set.size() == 0 || !(t.set.support > 0.0f) || !(t.set.mass > 0.0f))
+      return param_error(fmt::format("controller {}: target {} has no weighted control samples", who, t.set.target));
+    if (c.hc > 0.0f && std::abs(t.set.support - c.hc) > 1e-4f * c.hc)
+      return param_error(fmt::format("controller {}: targets have different control supports ({} m and {} m); "
+                                     "sample them at one spacing", who, c.hc, t.set.support));
+    c.hc = std::max(c.hc, t.set.support);
+  }
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    FF_CHECK(targets[t].motion.validate(fmt::format("targets[{}]", t)));
+    c.start.push_back(targets[t].start);
+    c.motion.push_back(targets[t].motion);
+    c.moving = c.moving || targets[t].motion.moving();
+    std::vector<TargetPhase> phases;
+    phases.push_back({-INFINITY, std::move(targets[t].set)});
+    double last = -INFINITY;
+    for (auto& [when, set] : targets[t].swaps) {
+      if (!(when > last) || !std::isfinite(when))
+        return param_error(fmt::format("targets[{}]: mesh swaps must come at increasing, finite times", t));
+      if (!set.consistent() || set.size() == 0 || std::abs(set.support - c.hc) > 1e-4f * c.hc || !(set.mass > 0.0f))
+        return param_error(fmt::format("targets[{}]: a swapped-in mesh has no control samples at the target's support", t));
+      last = when;
+      phases.push_back({when, std::move(set)});
+    }
+    c.phases.push_back(std::move(phases));
+  }
+  return c;
+}
+
+double full_gradient_sum(float d, float hc, float particle_mass, double rho_ref) {
+  const core::Spiky spiky(hc);
+  const int reach = static_cast<int>(std::ceil(hc / d));
+  double s0 = 0.0;
+  for (int k = -reach; k <= reach; ++k)
+    for (int j = -reach; j <= reach; ++j)
+      for (int i = -reach; i <= reach; ++i) {
+        if (!(i || j || k)) continue;
+        s0 += ((particle_mass / rho_ref) * spiky.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
+      }
+  return s0;
+}
+
+}  // namespace ff::control

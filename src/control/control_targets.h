@@ -1,0 +1,44 @@
+#pragma once
+// What every controller checks and keeps of its targets: the samples present and weighted, one support H_c for
+// all (they are sampled at one spacing), mesh swaps at increasing times, valid keyframes. Shared by `adaptive`
+// and the baselines so that they accept and reject exactly the same scenes.
+#include "control/target_motion.h"
+#include "core/error.h"
+#include "sampling/control_set.h"
+
+#include <string_view>
+#include <vector>
+
+namespace ff::control {
+
+/// One target as the controllers see it: its samples (weights computed) and when it starts to act.
+struct ControlTarget {
+  sampling::ControlSet set;  ///< samples in the rest pose
+  double start = 0.0;        ///< s; before this the target attracts nothing
+  TargetMotion motion;       ///< keyframes (none: static)
+  /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
+  std::vector<std::pair<double, sampling::ControlSet>> swaps;
+};
+
+/// One of a target's sample sets and the time from which it is in use (the first: −∞).
+struct TargetPhase {
+  double time;
+  sampling::ControlSet set;
+};
+
+struct CheckedTargets {
+  float hc = 0.0f;                                 ///< H_c of every set
+  std::vector<std::vector<TargetPhase>> phases;    ///< per target, in time order
+  std::vector<double> start;                       ///< per target, s
+  std::vector<TargetMotion> motion;                ///< per target
+  bool moving = false;                             ///< any target keyframed
+};
+
+/// Errors name `who` (the controller) and the target.
+Result<CheckedTargets> check_targets(std::vector<ControlTarget> targets, std::string_view who);
+
+/// S_0 = Σ_k |g_k|² over a full resting lattice neighbourhood, g_k = (m_p/ρ_ref) ∇W_spiky(k d, H_c): what a filled
+/// interior control particle sees; the scale of the density constraints' ε_c (METHOD §a.3).
+double full_gradient_sum(float d, float hc, float particle_mass, double rho_ref);
+
+}  // namespace ff::control

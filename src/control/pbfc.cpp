@@ -1,0 +1,20 @@
+#include "control/pbfc.h"
+
+#include <cmath>
+
+namespace ff::control {
+
+Result<std::unique_ptr<sim::Controller>> make_pbfc(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                   const PbfcParams& params) {
+  FF_CHECK(params.validate());
+  DensitySpringConfig cfg;
+  cfg.name = "pbfc";
+  cfg.alpha = params.alpha, cfg.epsilon = params.epsilon;
+  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
+  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  cfg.velocity = params.velocity, cfg.velocity_moving = params.velocity_moving;
+  FF_TRY(auto c, DensitySpringController::create(std::move(targets), ctx, std::move(cfg)));
+  return std::unique_ptr<sim::Controller>(std::move(c));
+}
+
+}  // namespace ff::control

@@ -1,0 +1,43 @@
+#pragma once
+// `rscf` [A]: Lu et al., "A Rigging-Skinning Scheme to Control Fluid Simulation", PG 2019 (METHOD.md §b.2). Its
+// skinning equations are not public; this is the documented approximation. The rig is the control samples; the
+// "skin" carries the rig's zero-order (Shepard-interpolated position x̄_p and velocity ū_p) and first-order
+// (velocity gradient G_p) features to every fluid particle within H_c, as an acceleration:
+//   a = k_x (x̄_p − x_p)/Δt_ref² + k_v (ū_p + G_p (x_p − x̄_p) − v_p)/Δt_ref,  Δt_ref = 1/60 s
+// No density term: fluid is pulled toward rig points whatever the local fill. Controlled: within H_c of the rig.
+#include "control/baseline_core.h"
+#include "sim/controller.h"
+
+#include <memory>
+
+namespace ff::control {
+
+struct RscfParams {
+  float position = 0.02f;  ///< k_x, zero-order position feature. [0, 1]
+  float velocity = 0.2f;   ///< k_v, zero-order velocity feature. [0, 1]
+  float gradient = 1.0f;   ///< weight of the first-order (velocity-gradient) feature; 0 switches it off. [0, 1]
+
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("position", s.position, 0.0, 1.0);
+    f("velocity", s.velocity, 0.0, 1.0);
+    f("gradient", s.gradient, 0.0, 1.0);
+  }
+  Status validate(std::string_view path = "controller.rscf") const { return validate_fields(*this, path); }
+};
+
+class RscfController final : public sim::Controller {
+ public:
+  static Result<std::unique_ptr<RscfController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                        const RscfParams& params);
+  std::string_view name() const override { return "rscf"; }
+  void begin_step(const sim::StepView& view, sim::ParticleSet& p) override;
+  void add_accelerations(const sim::StepView& view, sim::ParticleSet& p) override;
+
+ private:
+  explicit RscfController(const RscfParams& params) : params_(params) {}
+  RscfParams params_;
+  BaselineCore core_;
+};
+
+}  // namespace ff::control

@@ -1,0 +1,21 @@
+#include "control/weighted.h"
+
+#include <cmath>
+
+namespace ff::control {
+
+Result<std::unique_ptr<sim::Controller>> make_weighted(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                       const WeightedParams& params) {
+  FF_CHECK(params.validate());
+  DensitySpringConfig cfg;
+  cfg.name = "weighted";
+  cfg.alpha = params.alpha, cfg.epsilon = params.epsilon, cfg.kappa = params.kappa;
+  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
+  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  cfg.velocity = cfg.velocity_moving = 0.0f;
+  cfg.per_sample_density = true;
+  FF_TRY(auto c, DensitySpringController::create(std::move(targets), ctx, std::move(cfg)));
+  return std::unique_ptr<sim::Controller>(std::move(c));
+}
+
+}  // namespace ff::control

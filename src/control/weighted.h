@@ -1,0 +1,39 @@
+#pragma once
+// `weighted` [A]: Zhou et al.'s earlier target-driven control (METHOD.md §b.4; its equations are not public, this
+// is the documented approximation): control-particle weights from the samples' SPH colour field, a bilateral
+// density constraint toward each control particle's own density ρ_c,i (sparse regions ask for less fluid) and the
+// adaptive spring of `pbfc`; no bond breaking, no boundary correction, no velocity term.
+#include "control/density_spring.h"
+
+namespace ff::control {
+
+struct WeightedParams {
+  float alpha = 1.0f;         ///< density-constraint strength. [0, 10]
+  /// ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny as pbfc's: ε = 1, 10, 100 gave E 0.72, 1.04,
+  /// 4.81 %.
+  float epsilon = 1.0f;
+  float kappa = 1.0f;         ///< κ of the colour-field weight w_i = 1 + κ (1 − cf_i/max cf). [0, 10]
+  float spring = 0.5f;        ///< as pbfc. [0, 5]
+  float spring_start = 1.5f;  ///< as pbfc, in H_c. [0, 10]
+  float steepness = 10.0f;    ///< as pbfc. [0.1, 1000]
+  float bond_reach = 1.0f;    ///< as pbfc, in H_c. [0.1, 4]
+  float lifetime = 3.0f;      ///< as pbfc, sub-steps. [0, 1000]
+
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("alpha", s.alpha, 0.0, 10.0);
+    f("epsilon", s.epsilon, 0.01, 100.0);
+    f("kappa", s.kappa, 0.0, 10.0);
+    f("spring", s.spring, 0.0, 5.0);
+    f("spring_start", s.spring_start, 0.0, 10.0);
+    f("steepness", s.steepness, 0.1, 1000.0);
+    f("bond_reach", s.bond_reach, 0.1, 4.0);
+    f("lifetime", s.lifetime, 0.0, 1000.0);
+  }
+  Status validate(std::string_view path = "controller.weighted") const { return validate_fields(*this, path); }
+};
+
+Result<std::unique_ptr<sim::Controller>> make_weighted(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                       const WeightedParams& params);
+
+}  // namespace ff::control

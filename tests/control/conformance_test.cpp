@@ -1,0 +1,162 @@
+// The conformance suite every registered controller passes (STYLE.md §5, issue 5), run over the registry so a new
+// controller is covered the moment it is listed: `none` is plain PBF bit for bit; no NaN after a few hundred
+// sub-steps; bindings in range; the same bits for 1 and 2 threads; unknown or out-of-range parameters are a clear
+// error; every real controller ends closer to the target than `none`. Then one focused test per baseline of the
+// behaviour METHOD.md §b documents for it.
+#include "control/control_cases.h"
+#include "control/lcat.h"
+#include "control/registry.h"
+#include "io/scene.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+namespace ff {
+namespace {
+
+std::vector<std::string> registered(bool with_none = true) {
+  std::vector<std::string> names;
+  for (const auto& e : control::registry())
+    if (with_none || e.name != "none") names.emplace_back(e.name);
+  return names;
+}
+
+control::ControllerSpec spec_of(const std::string& name) {
+  control::ControllerSpec s;
+  s.name = name;
+  return s;
+}
+
+// One 200-frame run per controller (≥ 400 sub-steps), shared by the tests that only read its end state.
+const test::Outcome& long_run(const std::string& name) {
+  static std::map<std::string, test::Outcome> cache;
+  static const test::Case c = test::sphere_case();
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, test::simulate(c, spec_of(name), 200)).first;
+  return it->second;
+}
+
+class Conformance : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Conformance, StaysFiniteForHundredsOfSubSteps) {
+  const auto& o = long_run(GetParam());
+  ASSERT_TRUE(o.ok);
+  for (std::size_t i = 0; i < o.x.size(); ++i)
+    ASSERT_TRUE(o.x[i].allFinite() && o.v[i].allFinite()) << GetParam() << ": particle " << i;
+}
+
+TEST_P(Conformance, BindsOnlyToExistingControlParticles) {
+  const auto& o = long_run(GetParam());
+  ASSERT_TRUE(o.ok);
+  std::size_t bound = 0;
+  for (Index b : o.bound) {
+    if (b == kInvalidIndex) continue;
+    ASSERT_LT(b, o.control_count) << GetParam();
+    ++bound;
+  }
+  if (GetParam() == "none") EXPECT_EQ(bound, 0u);
+  else EXPECT_GT(bound, 0u) << GetParam() << " controls nothing";
+}
+
+// Every controller but the reference.
+class RealController : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RealController, EndsCloserToTheTargetThanNone) {
+  const auto& o = long_run(GetParam());
+  const auto& none = long_run("none");
+  ASSERT_TRUE(o.ok && none.ok);
+  EXPECT_LT(o.m.error_rate, none.m.error_rate) << GetParam();
+  std::printf("%-9s E %6.2f %%  inside %.3f  splash %.3f  controlled %zu of %zu (none: E %.2f %%)\n", GetParam().c_str(),
+              o.m.error_rate, o.m.inside_fraction, o.m.splash_fraction, o.m.controlled, o.m.fluid, none.m.error_rate);
+}
+
+TEST_P(Conformance, IsIndependentOfTheThreadCount) {
+  const test::Case c = test::sphere_case();
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const auto one = test::simulate(c, spec_of(GetParam()), 30);
+  omp_set_num_threads(2);
+  const auto two = test::simulate(c, spec_of(GetParam()), 30);
+  omp_set_num_threads(before);
+  ASSERT_EQ(one.x.size(), two.x.size());
+  for (std::size_t i = 0; i < one.x.size(); ++i) {
+    ASSERT_EQ(one.x[i], two.x[i]) << GetParam() << ": particle " << i;
+    ASSERT_EQ(one.bound[i], two.bound[i]) << GetParam() << ": particle " << i;
+  }
+}
+
+TEST_P(Conformance, UnknownOrOutOfRangeParametersAreAClearError) {
+  const std::string name = GetParam();
+  // An unknown key inside the controller's own parameter object (or, for `none`, which has none, the object itself).
+  const std::string text = name == "none" ? R"({"controller": {"name": "none", "none": {"x": 1}}})"
+                                          : R"({"controller": {"name": ")" + name + R"(", ")" + name + R"(": {"bogus_key": 1}}})";
+  auto s = io::parse_scene(text, ".", "scene.json");
+  ASSERT_FALSE(s.has_value()) << name;
+  const std::string want = name == "none" ? "controller.none" : "controller." + name + ".bogus_key";
+  EXPECT_NE(s.error().message.find(want), std::string::npos) << s.error().message;
+  EXPECT_EQ(s.error().message.find('\n'), std::string::npos);
+  if (name == "none" || name == "adaptive") return;
+  // The first parameter of each baseline set far outside its range.
+  auto spec = spec_of(name);
+  std::string first;
+  auto visit = [&](auto& params) {
+    std::remove_reference_t<decltype(params)>::fields(params, [&](std::string_view k, float& v, double, double hi) {
+      if (first.empty()) first = std::string(k), v = static_cast<float>(hi * 10 + 1);
+    });
+  };
+  if (name == "thuerey") visit(spec.thuerey);
+  if (name == "pbfc") visit(spec.pbfc);
+  if (name == "weighted") visit(spec.weighted);
+  if (name == "rscf") visit(spec.rscf);
+  if (name == "lcat") visit(spec.lcat);
+  const auto st = spec.validate();
+  ASSERT_FALSE(st.ok()) << name;
+  EXPECT_NE(st.error().message.find("controller." + name + "." + first), std::string::npos) << st.error().message;
+  // And NaN.
+  auto nan_spec = spec_of(name);
+  first.clear();
+  auto visit_nan = [&](auto& params) {
+    std::remove_reference_t<decltype(params)>::fields(params, [&](std::string_view k, float& v, double, double) {
+      if (first.empty()) first = std::string(k), v = std::nanf("");
+    });
+  };
+  if (name == "thuerey") visit_nan(nan_spec.thuerey);
+  if (name == "pbfc") visit_nan(nan_spec.pbfc);
+  if (name == "weighted") visit_nan(nan_spec.weighted);
+  if (name == "rscf") visit_nan(nan_spec.rscf);
+  if (name == "lcat") visit_nan(nan_spec.lcat);
+  EXPECT_FALSE(nan_spec.validate().ok()) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(registered()),
+                         [](const auto& p) { return p.param; });
+INSTANTIATE_TEST_SUITE_P(Registry, RealController, ::testing::ValuesIn(registered(/*with_none=*/false)),
+                         [](const auto& p) { return p.param; });
+
+TEST(ConformanceNone, IsBitIdenticalToPlainPbf) {
+  // `none` from the registry, given the scene's targets, against the solver's own NoController without any.
+  const test::Case c = test::sphere_case();
+  const auto reg = test::simulate(c, spec_of("none"), 60);
+  sim::ParticleSet p;
+  ASSERT_TRUE(sim::fill_sources(c.fluid, c.dom, c.sp.particle_radius, p).ok());
+  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::PbfSolver solver(c.sp, c.dom);
+  sim::NoController plain;
+  for (int f = 0; f < 60; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, plain).has_value());
+  std::vector<Vec3f> x, v;
+  std::vector<std::uint8_t> t;
+  sim::sorted_by_id(p, x, v, t);
+  ASSERT_EQ(x.size(), reg.x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    ASSERT_EQ(x[i], reg.x[i]) << "particle " << i;
+    ASSERT_EQ(v[i], reg.v[i]) << "particle " << i;
+  }
+}
+
+}  // namespace
+}  // namespace ff
