@@ -29,33 +29,6 @@ using namespace ff;
 
 namespace {
 
-io::TriangleMesh star_figure() {
-  // A body with four thin limbs and a head: parts overlap (the winding number makes them one solid).
-  io::TriangleMesh m = test::translate(test::box(Vec3f(0.12f, 0.25f, 0.08f)), Vec3f(0, 0.55f, 0));
-  m = test::merge(m, test::translate(test::uv_sphere(0.1f, 24), Vec3f(0, 0.9f, 0)));
-  m = test::merge(m, test::translate(test::box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(-0.07f, 0.2f, 0)));
-  m = test::merge(m, test::translate(test::box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(0.07f, 0.2f, 0)));
-  m = test::merge(m, test::translate(test::box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(-0.3f, 0.7f, 0)));
-  m = test::merge(m, test::translate(test::box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(0.3f, 0.7f, 0)));
-  return m;
-}
-
-io::TriangleMesh tube_lattice() {
-  // 3 × 3 vertical and 3 × 3 horizontal square tubes of 0.07 m through a 0.8 m cube (carbon-tube-like).
-  io::TriangleMesh m;
-  bool first = true;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) {
-      const float u = -0.3f + 0.3f * float(a), v = -0.3f + 0.3f * float(b);
-      auto vert = test::translate(test::box(Vec3f(0.035f, 0.4f, 0.035f)), Vec3f(u, 0.4f, v));
-      auto hori = test::translate(test::box(Vec3f(0.4f, 0.035f, 0.035f)), Vec3f(0, 0.1f + 0.3f * float(a), v));
-      m = first ? vert : test::merge(m, vert);
-      m = test::merge(m, hori);
-      first = false;
-    }
-  return m;
-}
-
 struct Scene {
   std::string name;
   json scene;
@@ -126,10 +99,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   test::write_obj(dir / "bunny.obj", *bunny);
-  test::write_obj(dir / "star.obj", star_figure());
+  test::write_obj(dir / "star.obj", test::star_figure());
   test::write_obj(dir / "vase.obj", test::vase(1.0f, 0.35f, 0.06f));
   test::write_obj(dir / "torus.obj", test::torus(0.4f, 0.12f, 64, 24));
-  test::write_obj(dir / "lattice.obj", tube_lattice());
+  test::write_obj(dir / "lattice.obj", test::tube_lattice());
   const int count = quick ? 3000 : 10000;
   auto target = [](const char* mesh, json extra = json::object()) {
     json t = {{"mesh", mesh}};

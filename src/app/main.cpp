@@ -1,5 +1,6 @@
 // fluidform command line (DESIGN.md "The CLI and output contract").
 // Exit codes: 0 ok, 2 bad input or usage, 1 runtime failure. Errors are one line on stderr.
+#include "app/compare.h"
 #include "app/progress_bar.h"
 #include "app/mesh_export.h"
 #include "app/run_pipeline.h"
@@ -146,6 +147,27 @@ int cmd_mesh(MeshCliOptions o) {
   return sum->final_ok ? 0 : fail(ff::numerical_error("mesh: the final mesh failed its checks"));
 }
 
+struct CompareCliOptions {
+  ff::app::CompareOptions compare;
+  std::string controllers;  // comma-separated; empty = every registered controller
+  int frames = 0;
+};
+
+int cmd_compare(CompareCliOptions o) {
+  // Every name is checked before anything runs or is written: a typo must not cost a long table.
+  if (!o.controllers.empty()) {
+    auto names = ff::app::parse_controller_list(o.controllers);
+    if (!names) return fail(names.error());
+    o.compare.controllers = std::move(*names);
+  }
+  if (o.frames > 0) o.compare.frames = o.frames;
+  auto table = ff::app::run_compare(o.compare);
+  if (!table) return fail(table.error());
+  fmt::print(stdout, "{}", ff::app::table_markdown(*table));
+  spdlog::info("compare: {} and table.csv in {}", (o.compare.out_dir / "table.md").string(), o.compare.out_dir.string());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -212,6 +234,21 @@ int main(int argc, char** argv) {
   mesh->add_flag("--no-frames", mesh_opt.no_frames, "do not write mesh/frame_NNNNN.obj");
   mesh->add_flag("--no-quantize", mesh_opt.no_quantize, "store float positions and normals in the GLB");
 
+  CompareCliOptions cmp_opt;
+  auto* compare = app.add_subcommand(
+      "compare", "run controllers on a scene, one fresh process each, and tabulate the paper's Table 3 columns");
+  compare->add_option("scene", cmp_opt.compare.scene_file, "scene file (JSON)")->required();
+  compare->add_option("--controllers", cmp_opt.controllers,
+                      "comma-separated controllers to run (default: all, listed below)");
+  compare->add_option("-o,--out", cmp_opt.compare.out_dir,
+                      "output folder: table.md, table.csv, table.json and one run folder per controller")
+      ->capture_default_str();
+  compare->add_option("--frames", cmp_opt.frames,
+                      fmt::format("output frames per controller (default: the scene's output.frames, else {})",
+                                  ff::app::kDefaultCompareFrames))
+      ->check(CLI::Range(1, 10'000'000));
+  compare->footer(ff::app::controllers_help());
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -234,6 +271,7 @@ int main(int argc, char** argv) {
   if (*run) return cmd_run(scene_file, run_opt);
   if (*sample) return cmd_sample(std::move(sample_opt));
   if (*mesh) return cmd_mesh(std::move(mesh_opt));
+  if (*compare) return cmd_compare(std::move(cmp_opt));
   // No sub-command: the bundled default scene into ./fluidform-out.
   return cmd_run(default_scene(), ff::app::RunOptions{});
 }

@@ -207,6 +207,27 @@ io::TriangleMesh plane_sheet(int n, float size) {
   return m;
 }
 
+io::TriangleMesh star_figure() {
+  io::TriangleMesh m = translate(box(Vec3f(0.12f, 0.25f, 0.08f)), Vec3f(0, 0.55f, 0));
+  m = merge(m, translate(uv_sphere(0.1f, 24), Vec3f(0, 0.9f, 0)));
+  m = merge(m, translate(box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(-0.07f, 0.2f, 0)));
+  m = merge(m, translate(box(Vec3f(0.04f, 0.2f, 0.04f)), Vec3f(0.07f, 0.2f, 0)));
+  m = merge(m, translate(box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(-0.3f, 0.7f, 0)));
+  m = merge(m, translate(box(Vec3f(0.22f, 0.035f, 0.035f)), Vec3f(0.3f, 0.7f, 0)));
+  return m;
+}
+
+io::TriangleMesh tube_lattice() {
+  io::TriangleMesh m;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      const float u = -0.3f + 0.3f * float(a), v = -0.3f + 0.3f * float(b);
+      m = merge(m, translate(box(Vec3f(0.035f, 0.4f, 0.035f)), Vec3f(u, 0.4f, v)));
+      m = merge(m, translate(box(Vec3f(0.4f, 0.035f, 0.035f)), Vec3f(0, 0.1f + 0.3f * float(a), v)));
+    }
+  return m;
+}
+
 io::TriangleMesh flip(io::TriangleMesh mesh) {
   for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   return mesh;

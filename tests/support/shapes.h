@@ -26,6 +26,13 @@ io::TriangleMesh hemisphere(float radius, int segments);
 /// A flat n × n grid of quads in the xz plane (y = 0) over [−size/2, size/2]², normals +y.
 io::TriangleMesh plane_sheet(int n, float size = 1.0f);
 
+/// A standing figure about 1 m tall: a box body, a sphere head, two thin legs and two thin arms held out
+/// sideways (arms end at x = ±0.52 m, y = 0.7 m). Parts overlap; the winding number makes them one solid.
+io::TriangleMesh star_figure();
+/// A lattice of thin square tubes (0.07 m) through a 0.8 m cube: 3 × 3 vertical and 3 × 3 horizontal
+/// (carbon-tube-like), base at y = 0. Tubes overlap at their crossings.
+io::TriangleMesh tube_lattice();
+
 /// Every triangle wound the other way.
 io::TriangleMesh flip(io::TriangleMesh mesh);
 /// Both meshes in one (b's indices shifted; no welding).
