@@ -10,6 +10,7 @@
 #include "io/scene.h"
 #include "sampling/control_io.h"
 #include "sampling/samplers.h"
+#include "server/serve.h"
 #include "surface/surface_params.h"
 
 #include <CLI/CLI.hpp>
@@ -168,6 +169,25 @@ int cmd_compare(CompareCliOptions o) {
   return 0;
 }
 
+struct ServeCliOptions {
+  ff::server::ServeOptions serve;
+  std::string controller;
+  bool as_fast_as_possible = false;
+};
+
+int cmd_serve(ServeCliOptions o) {
+  if (!o.controller.empty()) {
+    if (!ff::control::find_controller(o.controller))
+      return fail(ff::param_error(fmt::format("--controller {} is not one of: {}", o.controller, ff::control::controller_names())));
+    o.serve.controller = o.controller;
+  }
+  o.serve.realtime = !o.as_fast_as_possible;
+  if (!fs::exists(o.serve.input)) return fail(ff::input_error(fmt::format("{}: no such scene file or run folder", o.serve.input.string())));
+  ff::app::ProgressBar bar(stderr);
+  if (auto st = ff::server::serve(o.serve, bar); !st.ok()) return fail(st.error());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -249,6 +269,24 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 10'000'000));
   compare->footer(ff::app::controllers_help());
 
+  ServeCliOptions serve_opt;
+  auto* serve = app.add_subcommand(
+      "serve", "live viewer: run a scene (or play back a run's folder) and watch, steer and edit it in a browser or WebXR headset");
+  serve->add_option("input", serve_opt.serve.input, "scene file (JSON), or the output folder of a finished run")->required();
+  serve->add_option("--port", serve_opt.serve.server.port, "TCP port (0: any free port, printed)")
+      ->capture_default_str()->check(CLI::Range(0, 65535));
+  serve->add_option("--bind", serve_opt.serve.server.bind,
+                    "address to listen on (loopback by default: whoever reaches the page can steer the simulation)")
+      ->capture_default_str();
+  serve->add_option("--max-clients", serve_opt.serve.server.max_clients, "viewers at once")->capture_default_str();
+  serve->add_option("--controller", serve_opt.controller, "shape controller: " + ff::control::controller_names());
+  serve->add_option("--mesh", serve_opt.serve.meshes, "another mesh for the viewer's mesh list (repeatable)");
+  serve->add_option("--web", serve_opt.serve.web_dir, "the viewer's folder (default: web/ of the source tree)");
+  serve->add_option("--cache", serve_opt.serve.cache_dir, "control-particle cache folder")->capture_default_str();
+  serve->add_option("--exit-after", serve_opt.serve.exit_after, "stop after this many seconds (default: at Ctrl-C)");
+  serve->add_flag("--as-fast-as-possible", serve_opt.as_fast_as_possible,
+                  "simulate as fast as the machine can (default: at most real time)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -272,6 +310,7 @@ int main(int argc, char** argv) {
   if (*sample) return cmd_sample(std::move(sample_opt));
   if (*mesh) return cmd_mesh(std::move(mesh_opt));
   if (*compare) return cmd_compare(std::move(cmp_opt));
+  if (*serve) return cmd_serve(std::move(serve_opt));
   // No sub-command: the bundled default scene into ./fluidform-out.
   return cmd_run(default_scene(), ff::app::RunOptions{});
 }

@@ -3,7 +3,7 @@
 #include "app/mesh_export.h"
 
 #include "app/auto_scene.h"
-#include "app/targets.h"
+#include "app/scene_setup.h"
 
 #include "core/memory.h"
 #include "core/parallel.h"
@@ -216,41 +216,16 @@ Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
 
 namespace {
 
-/// Per-frame shape metrics of every target, and their N_c-weighted aggregate into `row`.
-/// A target's shapes over time: its mesh, then each swapped-in mesh from its time on.
-struct TargetShapes {
-  std::vector<double> from;  // from[0] = −∞
-  std::vector<metrics::TargetShape> shape;
-  const metrics::TargetShape& at(double t) const {
-    std::size_t k = 0;
-    while (k + 1 < from.size() && t >= from[k + 1]) ++k;
-    return shape[k];
-  }
-};
-
+/// Per-frame shape metrics of every target (app/scene_setup.h), and their N_c-weighted aggregate into `row`.
 void measure_frame(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motion,
                    double time, const sim::ParticleSet& p, float r, int frame, std::vector<std::uint8_t>& controlled,
                    FrameRow& row, std::vector<TargetRow>& target_rows) {
   if (shapes.empty()) return;
-  controlled.resize(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
-  double w = 0, e = 0, ef = 0, eb = 0, efa = 0, in = 0, sp = 0;
-  std::size_t ctrl = 0;
-  for (std::size_t t = 0; t < shapes.size(); ++t) {
-    // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose.
-    const control::Pose pose = motion[t].at(time);
-    const metrics::TargetShape& shape = shapes[t].at(time);
-    const auto m = metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
-                                    pose.rest_from_world(), pose.scale);
-    target_rows.push_back({frame, static_cast<int>(t), m});
-    const double nc = static_cast<double>(shape.sample_count());
-    ctrl += m.controlled;
-    w += nc, e += nc * m.error_rate, ef += nc * m.e_fwd, eb += nc * m.e_bwd, efa += nc * m.e_fwd_all;
-    in += nc * m.inside_fraction, sp += nc * m.splash_fraction;
-  }
-  row.controlled = ctrl;
-  row.error_rate = e / w, row.e_fwd = ef / w, row.e_bwd = eb / w, row.e_fwd_all = efa / w;
-  row.inside = in / w, row.splash = sp / w;
+  const ShapeMeasure m = measure_targets(shapes, motion, time, p, r, controlled);
+  for (std::size_t t = 0; t < m.per_target.size(); ++t) target_rows.push_back({frame, static_cast<int>(t), m.per_target[t]});
+  row.controlled = m.controlled;
+  row.error_rate = m.error_rate, row.e_fwd = m.e_fwd, row.e_bwd = m.e_bwd, row.e_fwd_all = m.e_fwd_all;
+  row.inside = m.inside, row.splash = m.splash;
 }
 
 /// The adaptive run length: the shape has formed and held when E(t) over the last `window` frames stays within
@@ -297,53 +272,11 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(ckpt_dir));
 
   // Control particles of every target (METHOD §a.1), cached in OUT/cache by mesh content and parameters.
-  // The sampling spacing defaults to the fluid spacing d (METHOD §0: d_c = d).
-  sampling::SamplingParams sp = scene.sampling;
-  if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
-  sp.rest_density = scene.solver.rest_density;
-  json targets_json = json::array();
-  std::vector<control::ControlTarget> controls;
-  std::vector<TargetShapes> shapes;
-  std::vector<control::TargetMotion> motions;
-  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
-    FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), out / "cache", progress));
-    for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
-    if (tc.from_cache)
-      spdlog::info("target {}: {} control particles from the cache ({})", i, tc.set.size(), tc.cache_file.filename().string());
-    else
-      spdlog::info("target {}: {} control particles ({}, spacing {:g} m, {:.2f} s)", i, tc.set.size(),
-                   sampling::method_name(tc.report.method), tc.report.spacing, tc.report.seconds);
-    targets_json.push_back({{"mesh", scene.targets[i].mesh.string()}, {"control_particles", tc.set.size()},
-                            {"spacing", tc.set.spacing}, {"volume", geometry[i].volume}, {"cached", tc.from_cache},
-                            {"controls", fs::relative(tc.cache_file, out).string()}});
-    auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
-    if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};
-    TargetShapes ts;
-    ts.from.push_back(-INFINITY);
-    ts.shape.push_back(std::move(*shape));
-    // Mesh swaps (morph): each swapped-in mesh is sampled (and cached) like a target of its own.
-    std::vector<std::pair<double, sampling::ControlSet>> swaps;
-    for (std::size_t k = 0; k < scene.targets[i].swaps.size(); ++k) {
-      io::TargetSpec spec = scene.targets[i];
-      spec.mesh = scene.targets[i].swaps[k].mesh;
-      FF_TRY(TargetControls sw, prepare_target(spec, sp, static_cast<std::uint8_t>(i), out / "cache", progress));
-      io::MeshLoadStats st;
-      auto mesh = io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st);
-      if (!mesh) return Error{mesh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, mesh.error().message)};
-      auto sh = metrics::TargetShape::build(*mesh, sw.set.position, sw.set.spacing);
-      if (!sh) return Error{sh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, sh.error().message)};
-      spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, spec.mesh.filename().string(),
-                   scene.targets[i].swaps[k].time, sw.set.size());
-      ts.from.push_back(scene.targets[i].swaps[k].time);
-      ts.shape.push_back(std::move(*sh));
-      swaps.emplace_back(scene.targets[i].swaps[k].time, std::move(sw.set));
-    }
-    shapes.push_back(std::move(ts));
-    control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,
-                                 0.5f * (geometry[i].box.min + geometry[i].box.max)};
-    motions.push_back(motion);
-    controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion, std::move(swaps)});
-  }
+  FF_TRY(PreparedTargets prepared, prepare_targets(scene, geometry, out / "cache", out, progress));
+  json targets_json = std::move(prepared.info);
+  std::vector<control::ControlTarget> controls = std::move(prepared.controls);
+  std::vector<TargetShapes> shapes = std::move(prepared.shapes);
+  std::vector<control::TargetMotion> motions = std::move(prepared.motions);
 
   sim::ParticleSet particles;
   std::vector<FrameRow> rows;
@@ -389,11 +322,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   // A scene without targets has nothing to control: plain PBF whatever the controller setting.
   control::ControllerSpec spec = scene.controller;
   if (controls.empty()) spec.name = "none";
-  const std::size_t control_count = [&] {
-    std::size_t c = 0;
-    for (const auto& t : controls) c += t.set.size();
-    return c;
-  }();
+  const std::size_t control_count = prepared.control_count;
   FF_TRY(auto controller, control::make_controller(spec, std::move(controls), ctx));
   spdlog::info("{} particles, d = {} m, H_p = {} m, rho0 = {:.1f} kg/m^3 (lattice-calibrated), controller {}, {} threads",
                particles.size(), scene.solver.spacing(), scene.solver.support(), solver.rest_density(),

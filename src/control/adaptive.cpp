@@ -134,6 +134,13 @@ void AdaptiveController::move_targets(double time) {
   });
 }
 
+void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) {
+  if (target >= motion_.size()) return;
+  // Nothing moved so far: the samples are at rest, so they are the rest pose that move_targets maps from.
+  if (!moving_) rest_x_ = xc_, rest_grad_ = grad_c_, moving_ = true;
+  motion_[target].live = pose;
+}
+
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and

@@ -19,6 +19,7 @@
 #include "control/control_context.h"
 #include "control/control_targets.h"
 #include "control/nearest_seed_field.h"
+#include "control/steering.h"
 #include "control/target_motion.h"
 #include "core/kernels.h"
 #include "core/neighbor_grid.h"
@@ -29,13 +30,15 @@
 
 namespace ff::control {
 
-class AdaptiveController final : public sim::Controller {
+class AdaptiveController final : public sim::Controller, public Steerable {
  public:
   /// Every target's set must have the same support H_c (they are sampled at one spacing).
   static Result<std::unique_ptr<AdaptiveController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                             const AdaptiveParams& params);
 
   std::string_view name() const override { return "adaptive"; }
+  /// Live steering (control/steering.h): the samples follow `pose` from the next sub-step on.
+  void set_target_pose(std::size_t target, const Pose& pose) override;
   void begin_step(const sim::StepView& view, sim::ParticleSet& p) override;
   void add_accelerations(const sim::StepView& view, sim::ParticleSet& p) override;
   void correct_positions(const sim::StepView& view, sim::ParticleSet& p) override;

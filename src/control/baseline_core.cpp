@@ -61,6 +61,12 @@ bool BaselineCore::update(double t_now, float dt) {
   return swapped;
 }
 
+void BaselineCore::set_target_pose(std::size_t t, const Pose& pose) {
+  if (t >= motion_.size()) return;
+  motion_[t].live = pose;
+  moving_ = true;
+}
+
 void BaselineCore::sample_to_fluid(const sim::ParticleSet& p, float r) {
   fluid_grid_.build(p.position);
   fluid_grid_.query(p.position, xc, r, sf);

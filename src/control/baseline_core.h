@@ -23,6 +23,9 @@ class BaselineCore {
   /// Moves the samples to their pose at `time` (u_c from the pose at time + dt) and applies mesh swaps.
   /// True when a swap changed the sample set (indices of the previous set are then invalid).
   bool update(double time, float dt);
+  /// Live steering (control/steering.h, the controllers forward to this): target `t` holds `pose` from the next
+  /// update() on. The rest positions are kept for every target (rest_), so a static target can start moving.
+  void set_target_pose(std::size_t t, const Pose& pose);
   /// Sample → fluid pairs within r (`sf`), on the fluid positions x; r ≤ the radius given to init.
   void sample_to_fluid(const sim::ParticleSet& p, float r);
   /// Fluid → sample pairs within r (`fs`), on the fluid positions x.

@@ -13,6 +13,7 @@
 // particle for its own ρ_c,i and weights it from the colour field of the samples (and has no velocity term).
 // Controlled: within H_c of a control particle of its target, or a live spring.
 #include "control/baseline_core.h"
+#include "control/steering.h"
 #include "sim/controller.h"
 
 #include <memory>
@@ -35,8 +36,10 @@ struct DensitySpringConfig {
   float kappa = 0.0f;         ///< colour-field weight w_i = 1 + κ (1 − cf_i/max cf); 0 → w_i = 1
 };
 
-class DensitySpringController final : public sim::Controller {
+class DensitySpringController final : public sim::Controller, public Steerable {
  public:
+  /// Live steering (control/steering.h): the shared core moves the samples.
+  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<DensitySpringController>> create(std::vector<ControlTarget> targets,
                                                                  const ControlContext& ctx, DensitySpringConfig cfg);
   std::string_view name() const override { return cfg_.name; }

@@ -10,6 +10,7 @@
 // Repulsion particles are off (METHOD §b.3 default). Controlled: within H_c of a template particle, and every
 // temporary.
 #include "control/baseline_core.h"
+#include "control/steering.h"
 #include "sim/controller.h"
 
 #include <memory>
@@ -32,8 +33,10 @@ struct LcatParams {
   Status validate(std::string_view path = "controller.lcat") const { return validate_fields(*this, path); }
 };
 
-class LcatController final : public sim::Controller {
+class LcatController final : public sim::Controller, public Steerable {
  public:
+  /// Live steering (control/steering.h): the shared core moves the samples.
+  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<LcatController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                         const LcatParams& params);
   std::string_view name() const override { return "lcat"; }

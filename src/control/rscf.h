@@ -6,6 +6,7 @@
 //   a = k_x (x̄_p − x_p)/Δt_ref² + k_v (ū_p + G_p (x_p − x̄_p) − v_p)/Δt_ref,  Δt_ref = 1/60 s
 // No density term: fluid is pulled toward rig points whatever the local fill. Controlled: within H_c of the rig.
 #include "control/baseline_core.h"
+#include "control/steering.h"
 #include "sim/controller.h"
 
 #include <memory>
@@ -26,8 +27,10 @@ struct RscfParams {
   Status validate(std::string_view path = "controller.rscf") const { return validate_fields(*this, path); }
 };
 
-class RscfController final : public sim::Controller {
+class RscfController final : public sim::Controller, public Steerable {
  public:
+  /// Live steering (control/steering.h): the shared core moves the samples.
+  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<RscfController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                         const RscfParams& params);
   std::string_view name() const override { return "rscf"; }

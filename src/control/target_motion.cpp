@@ -29,6 +29,11 @@ Eigen::Affine3f Pose::rest_from_world() const {
 Pose TargetMotion::at(double time) const {
   Pose p;
   p.pivot = pivot;
+  if (live) {  // steered live: the pose set last, about this target's own pivot
+    p = *live;
+    p.pivot = pivot;
+    return p;
+  }
   if (keys.empty()) return p;
   const Keyframe* a = &keys.front();
   const Keyframe* b = a;

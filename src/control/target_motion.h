@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -35,8 +36,11 @@ struct TargetMotion {
   std::vector<Keyframe> keys;
   bool smooth = false;           ///< smoothstep easing between keyframes (else linear)
   Vec3f pivot{Vec3f::Zero()};
+  /// A pose set at run time (control/steering.h: the live viewer's drag). When set it replaces the keyframes
+  /// from then on; a scene never sets it, so runs from scene files are unchanged.
+  std::optional<Pose> live{};
 
-  bool moving() const { return !keys.empty(); }
+  bool moving() const { return !keys.empty() || live.has_value(); }
   Pose at(double time) const;
   Status validate(std::string_view path) const;
 };

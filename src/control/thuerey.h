@@ -8,6 +8,7 @@
 //                                preservation), ū_p the w_v-weighted control velocity, β_Δt = 1 − (1 − β)^{Δt/0.01}
 // Controlled: within R_a of a control particle (every such particle also receives Δv).
 #include "control/baseline_core.h"
+#include "control/steering.h"
 #include "sim/controller.h"
 
 #include <memory>
@@ -30,8 +31,10 @@ struct ThuereyParams {
   Status validate(std::string_view path = "controller.thuerey") const { return validate_fields(*this, path); }
 };
 
-class ThuereyController final : public sim::Controller {
+class ThuereyController final : public sim::Controller, public Steerable {
  public:
+  /// Live steering (control/steering.h): the shared core moves the samples.
+  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<ThuereyController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                            const ThuereyParams& params);
   std::string_view name() const override { return "thuerey"; }

@@ -1,0 +1,102 @@
+#pragma once
+// A scene stepped one frame at a time, for the live viewer (`fluidform serve SCENE.json`, issue 7): loaded, completed
+// and sampled exactly as `fluidform run` does (app/scene_setup.h), then steered between frames — a target moved or
+// rotated (control/steering.h), its mesh swapped for another of the scene's meshes, the controller switched, the run
+// restarted. Not thread-safe: one thread (the server's simulation thread) owns it.
+#include "app/auto_scene.h"
+#include "app/scene_setup.h"
+#include "control/registry.h"
+#include "control/target_motion.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "io/scene.h"
+#include "sim/particle_set.h"
+#include "sim/pbf_solver.h"
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ff::app {
+
+struct LiveOptions {
+  std::filesystem::path cache_dir = "fluidform-out/cache";  ///< control-particle cache (shared with `run`'s default)
+  std::optional<std::string> controller;                    ///< overrides scene.controller.name
+  std::vector<std::filesystem::path> extra_meshes;          ///< more meshes for the swap list (sampled when chosen)
+};
+
+/// What one step reports (the viewer's HUD).
+struct LiveFrame {
+  int frame = 0;
+  double time = 0.0;          ///< s simulated, end of the frame
+  double step_seconds = 0.0;  ///< wall-clock of the frame's sub-steps
+  int substeps = 0;
+  std::size_t controlled = 0;
+  double error_rate = NAN;    ///< %, N_c-weighted over the targets, each against its current (steered) pose; NaN: none
+};
+
+/// A target's pose as the viewer edits it: about the target's pivot (its rest bounding-box centre).
+struct LivePose {
+  Vec3f translate{Vec3f::Zero()};   ///< m
+  Vec3f rotate_deg{Vec3f::Zero()};  ///< degrees about x, y, z (R = R_z R_y R_x)
+  float scale = 1.0f;
+};
+
+struct LiveTarget {
+  std::size_t mesh = 0;  ///< index into LiveScene::meshes()
+  Vec3f pivot{Vec3f::Zero()};
+  Aabb box;              ///< rest pose, world
+  LivePose pose;
+};
+
+class LiveScene {
+ public:
+  static Result<std::unique_ptr<LiveScene>> create(const io::Scene& scene, const LiveOptions& options,
+                                                   core::Progress& progress);
+
+  /// Advances one frame of 1/fps s. Errors: the solver's (a non-finite particle).
+  Result<LiveFrame> step();
+  /// The fluid back to its initial state at t = 0, the controller rebuilt (poses and meshes kept).
+  Status restart();
+  /// Switches the controller (a registry name), keeping the fluid where it is.
+  Status set_controller(const std::string& name);
+  /// Moves target `t` (its samples from the next sub-step; the metrics against the moved target). The pose is
+  /// clamped so that the target's centre stays inside the domain; returns the pose applied.
+  Result<LivePose> set_pose(std::size_t t, const LivePose& pose);
+  /// Target `t` becomes meshes()[mesh] (sampled with the target's transform, cached like a run's targets).
+  Status set_mesh(std::size_t t, std::size_t mesh, core::Progress& progress);
+
+  const sim::ParticleSet& particles() const { return particles_; }
+  const std::vector<LiveTarget>& targets() const { return targets_; }
+  /// The scene's meshes: every target's and every mesh swap's, once each, then LiveOptions::extra_meshes.
+  const std::vector<std::filesystem::path>& meshes() const { return meshes_; }
+  std::string controller_name() const;
+  const io::Scene& scene() const { return scene_; }
+  double time() const { return time_; }
+  int frame() const { return frame_; }
+  double fps() const { return scene_.output.fps; }
+
+ private:
+  LiveScene() = default;
+  Status rebuild_controller();
+
+  io::Scene scene_;
+  LiveOptions options_;
+  std::vector<TargetGeometry> geometry_;
+  std::vector<control::ControlTarget> controls_;  // master copy: a controller is made from a copy
+  std::vector<TargetShapes> shapes_;
+  std::vector<control::TargetMotion> motions_;    // with the live poses (TargetMotion::live)
+  std::vector<LiveTarget> targets_;
+  std::vector<std::filesystem::path> meshes_;
+  sim::ParticleSet initial_, particles_;
+  std::unique_ptr<sim::PbfSolver> solver_;
+  control::ControlContext ctx_;
+  std::unique_ptr<sim::Controller> controller_;
+  std::vector<std::uint8_t> scratch_;
+  double time_ = 0.0;
+  int frame_ = 0;
+};
+
+}  // namespace ff::app

@@ -1,0 +1,92 @@
+#include "app/scene_setup.h"
+
+#include "app/targets.h"
+#include "io/load_mesh.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
+namespace ff::app {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vector<TargetGeometry>& geometry,
+                                        const fs::path& cache_dir, const fs::path& report_dir,
+                                        core::Progress& progress) {
+  PreparedTargets out;
+  // The sampling spacing defaults to the fluid spacing d (METHOD §0: d_c = d).
+  sampling::SamplingParams sp = scene.sampling;
+  if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
+  sp.rest_density = scene.solver.rest_density;
+  for (std::size_t i = 0; i < scene.targets.size(); ++i) {
+    FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), cache_dir, progress));
+    for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
+    if (tc.from_cache)
+      spdlog::info("target {}: {} control particles from the cache ({})", i, tc.set.size(), tc.cache_file.filename().string());
+    else
+      spdlog::info("target {}: {} control particles ({}, spacing {:g} m, {:.2f} s)", i, tc.set.size(),
+                   sampling::method_name(tc.report.method), tc.report.spacing, tc.report.seconds);
+    out.info.push_back({{"mesh", scene.targets[i].mesh.string()}, {"control_particles", tc.set.size()},
+                        {"spacing", tc.set.spacing}, {"volume", geometry[i].volume}, {"cached", tc.from_cache},
+                        {"controls", fs::relative(tc.cache_file, report_dir).string()}});
+    out.control_count += tc.set.size();
+    auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
+    if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};
+    TargetShapes ts;
+    ts.from.push_back(-INFINITY);
+    ts.shape.push_back(std::move(*shape));
+    // Mesh swaps (morph): each swapped-in mesh is sampled (and cached) like a target of its own.
+    std::vector<std::pair<double, sampling::ControlSet>> swaps;
+    for (std::size_t k = 0; k < scene.targets[i].swaps.size(); ++k) {
+      io::TargetSpec spec = scene.targets[i];
+      spec.mesh = scene.targets[i].swaps[k].mesh;
+      FF_TRY(TargetControls sw, prepare_target(spec, sp, static_cast<std::uint8_t>(i), cache_dir, progress));
+      io::MeshLoadStats st;
+      auto mesh = io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st);
+      if (!mesh) return Error{mesh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, mesh.error().message)};
+      auto sh = metrics::TargetShape::build(*mesh, sw.set.position, sw.set.spacing);
+      if (!sh) return Error{sh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, sh.error().message)};
+      spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, spec.mesh.filename().string(),
+                   scene.targets[i].swaps[k].time, sw.set.size());
+      ts.from.push_back(scene.targets[i].swaps[k].time);
+      ts.shape.push_back(std::move(*sh));
+      swaps.emplace_back(scene.targets[i].swaps[k].time, std::move(sw.set));
+    }
+    out.shapes.push_back(std::move(ts));
+    control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,
+                                 0.5f * (geometry[i].box.min + geometry[i].box.max)};
+    out.motions.push_back(motion);
+    out.controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion, std::move(swaps)});
+  }
+  return out;
+}
+
+ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,
+                             double time, const sim::ParticleSet& p, float r, std::vector<std::uint8_t>& controlled) {
+  ShapeMeasure out;
+  if (shapes.empty()) return out;
+  controlled.resize(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
+  double w = 0, e = 0, ef = 0, eb = 0, efa = 0, in = 0, sp = 0;
+  std::size_t ctrl = 0;
+  for (std::size_t t = 0; t < shapes.size(); ++t) {
+    // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose.
+    const control::Pose pose = motions[t].at(time);
+    const metrics::TargetShape& shape = shapes[t].at(time);
+    const auto m = metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
+                                    pose.rest_from_world(), pose.scale);
+    out.per_target.push_back(m);
+    const double nc = static_cast<double>(shape.sample_count());
+    ctrl += m.controlled;
+    w += nc, e += nc * m.error_rate, ef += nc * m.e_fwd, eb += nc * m.e_bwd, efa += nc * m.e_fwd_all;
+    in += nc * m.inside_fraction, sp += nc * m.splash_fraction;
+  }
+  out.controlled = ctrl;
+  out.error_rate = e / w, out.e_fwd = ef / w, out.e_bwd = eb / w, out.e_fwd_all = efa / w;
+  out.inside = in / w, out.splash = sp / w;
+  return out;
+}
+
+}  // namespace ff::app

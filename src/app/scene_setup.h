@@ -1,0 +1,61 @@
+#pragma once
+// The part of a run's start that `fluidform run` and `fluidform serve` share: every target's control particles
+// (sampled or from the cache), its metric shapes over time (mesh swaps included) and its motion; and the
+// per-frame shape metrics of all targets, N_c-weighted into one row. Factored out of run_pipeline.cpp so that
+// the live viewer (app/live_scene.h) steps exactly the scene a run would.
+#include "app/auto_scene.h"
+#include "control/control_targets.h"
+#include "control/target_motion.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "io/scene.h"
+#include "metrics/shape_metrics.h"
+#include "sim/particle_set.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace ff::app {
+
+/// A target's shapes over time: its mesh, then each swapped-in mesh from its time on.
+struct TargetShapes {
+  std::vector<double> from;  // from[0] = −∞
+  std::vector<metrics::TargetShape> shape;
+  const metrics::TargetShape& at(double t) const {
+    std::size_t k = 0;
+    while (k + 1 < from.size() && t >= from[k + 1]) ++k;
+    return shape[k];
+  }
+};
+
+/// Every target of a completed scene, ready for make_controller and the metrics.
+struct PreparedTargets {
+  std::vector<control::ControlTarget> controls;  ///< handed to make_controller (moved out)
+  std::vector<TargetShapes> shapes;
+  std::vector<control::TargetMotion> motions;
+  nlohmann::json info = nlohmann::json::array();  ///< report.json "targets" (control file paths relative to report_dir)
+  std::size_t control_count = 0;                  ///< samples of every target's first phase
+};
+
+/// Samples (or loads from `cache_dir`) every target of `scene` (completed by complete_scene, `geometry` from
+/// load_targets) and its mesh swaps. Errors name the target.
+Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vector<TargetGeometry>& geometry,
+                                        const std::filesystem::path& cache_dir,
+                                        const std::filesystem::path& report_dir, core::Progress& progress);
+
+/// The N_c-weighted shape metrics of one frame, and each target's own.
+struct ShapeMeasure {
+  std::size_t controlled = 0;
+  double error_rate = 0, e_fwd = 0, e_bwd = 0, e_fwd_all = 0, inside = 0, splash = 0;
+  std::vector<metrics::FrameMetrics> per_target;
+};
+
+/// Measures every target at `time`, each in its rest frame (the fluid mapped into it by the inverse of the pose
+/// `motions[t].at(time)`). `controlled` is scratch. No targets: an empty measure.
+ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,
+                             double time, const sim::ParticleSet& p, float r, std::vector<std::uint8_t>& controlled);
+
+}  // namespace ff::app

@@ -1,0 +1,29 @@
+#pragma once
+// What the viewer may ask of the server: small JSON text messages over the WebSocket (web/src/protocol.js writes
+// them). Every message is checked here before it reaches the simulation; anything else is refused with a reason.
+//   {"type": "play"} | {"type": "pause"} | {"type": "restart"}
+//   {"type": "controller", "name": "none"}
+//   {"type": "pose", "target": 0, "translate": [x, y, z], "rotate": [rx, ry, rz], "scale": 1}   (rotate, scale optional)
+//   {"type": "mesh", "target": 0, "mesh": 1}      (an index into the hello message's "meshes")
+#include "app/live_scene.h"
+#include "core/error.h"
+
+#include <string>
+#include <string_view>
+
+namespace ff::server {
+
+inline constexpr std::size_t kMaxClientMessage = 16 * 1024;  ///< bytes; a real command is under 200
+
+struct Command {
+  enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh } kind = Kind::Play;
+  std::size_t target = 0;
+  app::LivePose pose;
+  std::string name;      ///< Controller
+  std::size_t mesh = 0;  ///< Mesh
+};
+
+/// Parses and checks one client message. Input error (one line, no echo of the message) for anything malformed.
+Result<Command> parse_command(std::string_view text);
+
+}  // namespace ff::server

@@ -1,0 +1,398 @@
+#include "server/serve.h"
+
+#include "app/live_scene.h"
+#include "app/mesh_export.h"
+#include "control/registry.h"
+#include "core/timer.h"
+#include "io/scene.h"
+#include "io/write_ply.h"
+#include "server/frame_codec.h"
+#include "server/messages.h"
+#include "server/static_files.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+namespace ff::server {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+Status ServeOptions::validate() const {
+  FF_CHECK(server.validate());
+  if (!(exit_after >= 0.0 && exit_after <= 1e7)) return param_error("--exit-after must be in [0, 1e7] s");
+  return {};
+}
+
+Result<fs::path> find_web_dir(const fs::path& hint) {
+  auto ok = [](const fs::path& d) { return fs::is_regular_file(d / "index.html") && fs::is_directory(d / "src"); };
+  if (!hint.empty()) {
+    if (!ok(hint)) return input_error(fmt::format("--web {}: no index.html and src/ there", hint.string()));
+    return hint;
+  }
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+    for (fs::path p = exe.parent_path(); !p.empty() && p != p.root_path(); p = p.parent_path())
+      if (ok(p / "web")) return p / "web";
+  const fs::path src = fs::path(FF_SOURCE_DIR) / "web";
+  if (ok(src)) return src;
+  return input_error("the viewer's files (web/index.html) were not found; pass --web DIR");
+}
+
+namespace {
+
+json vec(const Vec3f& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json pose_json(std::size_t t, const app::LivePose& p, double time) {
+  return {{"type", "pose"},           {"target", t},          {"translate", vec(p.translate)},
+          {"rotate", vec(p.rotate_deg)}, {"scale", p.scale}, {"time", time}};
+}
+
+// Frames per second of wall time over about the last second (the HUD's simulation rate).
+class RateMeter {
+ public:
+  float tick() {
+    const double now = clock_.seconds();
+    stamps_.push_back(now);
+    while (stamps_.size() > 2 && now - stamps_.front() > 1.0) stamps_.pop_front();
+    const double span = stamps_.back() - stamps_.front();
+    return span > 0 ? static_cast<float>(double(stamps_.size() - 1) / span) : 0.0f;
+  }
+  void reset() { stamps_.clear(); }
+
+ private:
+  core::Stopwatch clock_;
+  std::deque<double> stamps_;
+};
+
+// Commands from the I/O thread to the simulation thread, applied between two frames.
+class CommandQueue {
+ public:
+  void push(Command c) {
+    std::lock_guard lock(mu_);
+    if (q_.size() < 1024) q_.push_back(std::move(c));  // a flood of drags must not grow without bound
+    cv_.notify_all();
+  }
+  std::deque<Command> take() {
+    std::lock_guard lock(mu_);
+    return std::exchange(q_, {});
+  }
+  /// Waits up to `seconds` for a command or a stop.
+  void wait(double seconds, const std::atomic<bool>& stop) {
+    std::unique_lock lock(mu_);
+    cv_.wait_for(lock, std::chrono::duration<double>(seconds), [&] { return !q_.empty() || stop.load(); });
+  }
+  void wake() { cv_.notify_all(); }
+
+ private:
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<Command> q_;
+};
+
+// What the simulation thread needs: the scene or the recorded frames, and where frames go.
+struct Shared {
+  WsServer* server = nullptr;
+  CommandQueue commands;
+  std::atomic<bool> stop{false};
+  std::atomic<bool> paused{false};
+  std::mutex hello_mu;
+  json hello;  // the current hello (controller, poses and meshes change it), under hello_mu
+  void set_hello(json h) {
+    std::lock_guard lock(hello_mu);
+    hello = std::move(h);
+  }
+  std::string hello_text() {
+    std::lock_guard lock(hello_mu);
+    return hello.dump();
+  }
+};
+
+json live_hello(const app::LiveScene& s, bool paused) {
+  json targets = json::array();
+  for (std::size_t t = 0; t < s.targets().size(); ++t) {
+    const auto& lt = s.targets()[t];
+    targets.push_back({{"mesh", lt.mesh},
+                       {"pivot", vec(lt.pivot)},
+                       {"box", {{"min", vec(lt.box.min)}, {"max", vec(lt.box.max)}}},
+                       {"pose", pose_json(t, lt.pose, s.time())}});
+  }
+  json meshes = json::array();
+  for (const auto& m : s.meshes()) meshes.push_back(m.filename().string());
+  json controllers = json::array();
+  for (const auto& e : control::registry()) controllers.push_back(std::string(e.name));
+  const auto& d = s.scene().domain;
+  return {{"type", "hello"},
+          {"mode", "live"},
+          {"fps", s.fps()},
+          {"radius", s.scene().solver.particle_radius},
+          {"particles", s.particles().size()},
+          {"controller", s.controller_name()},
+          {"controllers", controllers},
+          {"meshes", meshes},
+          {"targets", targets},
+          {"domain", {{"min", vec(d.min)}, {"max", vec(d.max)}}},
+          {"paused", paused},
+          {"animation", nullptr}};
+}
+
+void publish(Shared& sh, const FrameInfo& info, const sim::ParticleSet& p) {
+  auto bytes = std::make_shared<const std::vector<std::uint8_t>>(encode_frame(info, p.position, p.target));
+  sh.server->publish_frame(std::move(bytes));
+}
+
+void error_text(Shared& sh, const std::string& what) {
+  spdlog::warn("serve: {}", what);
+  sh.server->broadcast_text(json{{"type", "error"}, {"message", what}}.dump());
+}
+
+// The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
+void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
+  RateMeter rate;
+  const double frame_dt = 1.0 / scene.fps();
+  core::Stopwatch clock;
+  double next_due = 0.0;
+  std::uint64_t frames = 0;
+  double step_total = 0.0;
+  publish(sh, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0}, scene.particles());
+  while (!sh.stop) {
+    for (Command& c : sh.commands.take()) {
+      Status st;
+      switch (c.kind) {
+        case Command::Kind::Play: sh.paused = false; break;
+        case Command::Kind::Pause: sh.paused = true; break;
+        case Command::Kind::Restart:
+          st = scene.restart();
+          rate.reset();
+          if (st.ok()) publish(sh, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0}, scene.particles());
+          break;
+        case Command::Kind::Controller: st = scene.set_controller(c.name); break;
+        case Command::Kind::Pose: {
+          auto applied = scene.set_pose(c.target, c.pose);
+          if (!applied) st = applied.error();
+          else sh.server->broadcast_text(pose_json(c.target, *applied, scene.time()).dump());
+          break;
+        }
+        case Command::Kind::Mesh: st = scene.set_mesh(c.target, c.mesh, progress); break;
+      }
+      if (!st.ok()) error_text(sh, st.error().message);
+      if (c.kind != Command::Kind::Pose) {
+        sh.set_hello(live_hello(scene, sh.paused));
+        // Everyone learns the new state (controller, meshes, paused) the way a new client would.
+        sh.server->broadcast_text(sh.hello_text());
+      } else {
+        sh.set_hello(live_hello(scene, sh.paused));
+      }
+    }
+    if (sh.paused) {
+      sh.commands.wait(0.05, sh.stop);
+      next_due = clock.seconds();
+      continue;
+    }
+    auto f = scene.step();
+    if (!f) {
+      error_text(sh, fmt::format("the simulation stopped: {}; restart to go on", f.error().message));
+      sh.paused = true;
+      sh.set_hello(live_hello(scene, true));
+      continue;
+    }
+    ++frames;
+    step_total += f->step_seconds;
+    const FrameInfo info{static_cast<std::uint32_t>(f->frame), f->time, static_cast<float>(1e3 * f->step_seconds),
+                         static_cast<float>(f->error_rate), rate.tick(), static_cast<std::uint32_t>(f->controlled)};
+    publish(sh, info, scene.particles());
+    if (opt.realtime) {
+      // At most real time: the viewer shows the forming at its true speed when the simulation is faster.
+      next_due = std::max(next_due + frame_dt, clock.seconds() - frame_dt);
+      const double wait = next_due - clock.seconds();
+      if (wait > 0) sh.commands.wait(wait, sh.stop);
+    }
+  }
+  if (frames)
+    spdlog::info("serve: {} frames simulated, {:.1f} ms per frame, {:.1f} frames per second of wall time", frames,
+                 1e3 * step_total / double(frames), double(frames) / clock.seconds());
+}
+
+// Playback of a finished run: its particle frames, read one at a time, in a loop at the run's frame rate.
+struct Recording {
+  std::vector<fs::path> frames;
+  std::vector<double> error_rate, step_seconds;  // from metrics.csv, per frame (NaN when unknown)
+  double fps = 60.0;
+  bool animation = false;
+};
+
+Result<Recording> open_recording(const fs::path& out) {
+  Recording r;
+  FF_TRY(r.frames, app::particle_frames(out));
+  r.animation = fs::is_regular_file(out / "animation.glb");
+  std::ifstream rep(out / "report.json");
+  if (rep) {
+    const json j = json::parse(rep, nullptr, false);
+    if (!j.is_discarded() && j.contains("scene") && j["scene"].contains("output") && j["scene"]["output"]["fps"].is_number())
+      r.fps = j["scene"]["output"]["fps"].get<double>();
+  }
+  r.error_rate.assign(r.frames.size(), NAN);
+  r.step_seconds.assign(r.frames.size(), 0.0);
+  std::ifstream csv(out / "metrics.csv");
+  std::string line;
+  if (csv && std::getline(csv, line)) {
+    std::vector<std::string> head;
+    std::stringstream hs(line);
+    for (std::string c; std::getline(hs, c, ',');) head.push_back(c);
+    const auto col = [&](const char* name) { return std::size_t(std::find(head.begin(), head.end(), name) - head.begin()); };
+    const std::size_t c_frame = col("frame"), c_err = col("error_rate_pct"), c_step = col("step_time_s");
+    while (std::getline(csv, line)) {
+      std::vector<std::string> v;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) v.push_back(c);
+      if (c_frame >= v.size()) continue;
+      const long f = std::strtol(v[c_frame].c_str(), nullptr, 10);
+      if (f < 0 || f >= long(r.frames.size())) continue;
+      if (c_err < v.size()) r.error_rate[std::size_t(f)] = std::strtod(v[c_err].c_str(), nullptr);
+      if (c_step < v.size()) r.step_seconds[std::size_t(f)] = std::strtod(v[c_step].c_str(), nullptr);
+    }
+  }
+  return r;
+}
+
+json playback_hello(const Recording& r, bool paused) {
+  return {{"type", "hello"},     {"mode", "playback"}, {"fps", r.fps},          {"frames", r.frames.size()},
+          {"controller", nullptr}, {"controllers", json::array()}, {"meshes", json::array()},
+          {"targets", json::array()}, {"paused", paused},
+          {"animation", r.animation ? json("/run/animation.glb") : json(nullptr)}};
+}
+
+void playback_loop(const Recording& rec, Shared& sh) {
+  core::Stopwatch clock;
+  RateMeter rate;
+  double next_due = 0.0;
+  std::size_t k = 0;
+  sim::ParticleSet ps;
+  while (!sh.stop) {
+    for (Command& c : sh.commands.take()) {
+      if (c.kind == Command::Kind::Play) sh.paused = false;
+      else if (c.kind == Command::Kind::Pause) sh.paused = true;
+      else if (c.kind == Command::Kind::Restart) k = 0;
+      else error_text(sh, "playback: a recorded run cannot be steered");
+      sh.set_hello(playback_hello(rec, sh.paused));
+    }
+    if (sh.paused) {
+      sh.commands.wait(0.05, sh.stop);
+      next_due = clock.seconds();
+      continue;
+    }
+    auto frame = io::read_particles_ply(rec.frames[k]);
+    if (!frame) {
+      error_text(sh, fmt::format("playback: {}", frame.error().message));
+      sh.paused = true;
+      continue;
+    }
+    const FrameInfo info{static_cast<std::uint32_t>(k), double(k) / rec.fps, static_cast<float>(1e3 * rec.step_seconds[k]),
+                         static_cast<float>(rec.error_rate[k]), rate.tick(), 0};
+    sh.server->publish_frame(std::make_shared<const std::vector<std::uint8_t>>(
+        encode_frame(info, frame->positions, frame->targets)));
+    k = (k + 1) % rec.frames.size();
+    next_due = std::max(next_due + 1.0 / rec.fps, clock.seconds() - 1.0 / rec.fps);
+    const double wait = next_due - clock.seconds();
+    if (wait > 0) sh.commands.wait(wait, sh.stop);
+  }
+}
+
+}  // namespace
+
+Status serve(const ServeOptions& opt, core::Progress& progress) {
+  FF_CHECK(opt.validate());
+  FF_TRY(const fs::path web, find_web_dir(opt.web_dir));
+  const fs::path three = web.parent_path() / "node_modules" / "three";
+  if (!fs::is_regular_file(three / "build" / "three.module.js"))
+    return input_error(fmt::format("{}: three.js is not installed (npm install)", three.string()));
+
+  Shared sh;
+  std::unique_ptr<app::LiveScene> live;
+  std::optional<Recording> rec;
+  std::vector<Mount> mounts{{"/", web}, {"/vendor/three/", three}};
+  std::error_code ec;
+  if (fs::is_directory(opt.input, ec)) {
+    FF_TRY(rec, open_recording(opt.input));
+    if (rec->animation) mounts.push_back({"/run/", opt.input});
+    spdlog::info("serve: playing back {} frames of {}{}", rec->frames.size(), opt.input.string(),
+                 rec->animation ? " and its animation.glb" : "");
+    sh.set_hello(playback_hello(*rec, false));
+  } else {
+    FF_TRY(io::Scene scene, io::load_scene(opt.input));
+    app::LiveOptions lo;
+    lo.cache_dir = opt.cache_dir;
+    lo.controller = opt.controller;
+    lo.extra_meshes = opt.meshes;
+    FF_TRY(live, app::LiveScene::create(scene, lo, progress));
+    spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
+    sh.set_hello(live_hello(*live, false));
+  }
+  const StaticFiles files(mounts);
+
+  std::mutex done_mu;
+  std::condition_variable done_cv;
+  auto request_stop = [&] {
+    {
+      std::lock_guard lock(done_mu);
+      sh.stop = true;
+    }
+    done_cv.notify_all();
+    sh.commands.wake();
+  };
+  WsServer::Callbacks cb;
+  cb.hello = [&] { return sh.hello_text(); };
+  cb.on_text = [&](const std::string& text) {
+    auto c = parse_command(text);
+    if (!c) {
+      spdlog::warn("serve: ignored a client message: {}", c.error().message);
+      return false;
+    }
+    sh.commands.push(std::move(*c));
+    return true;
+  };
+  cb.on_signal = [&] {
+    spdlog::info("serve: stopping (signal)");
+    request_stop();
+  };
+  WsServer server(opt.server, files, cb);
+  sh.server = &server;
+  FF_CHECK(server.start());
+  const std::string host = opt.server.bind.find(':') != std::string::npos ? "[" + opt.server.bind + "]" : opt.server.bind;
+  std::printf("serving http://%s:%u/\n", host.c_str(), unsigned(server.port()));
+  std::fflush(stdout);
+
+  std::thread sim([&] {
+    if (live) live_loop(*live, sh, opt, progress);
+    else playback_loop(*rec, sh);
+  });
+  {
+    std::unique_lock lock(done_mu);
+    if (opt.exit_after > 0)
+      done_cv.wait_for(lock, std::chrono::duration<double>(opt.exit_after), [&] { return sh.stop.load(); });
+    else
+      done_cv.wait(lock, [&] { return sh.stop.load(); });
+  }
+  request_stop();
+  sim.join();
+  const ServerStats st = server.stats();
+  server.stop();
+  spdlog::info("serve: stopped; {} frames sent, {} skipped for slow clients, {} bad client messages ignored", st.frames_sent,
+               st.frames_skipped, st.bad_messages);
+  return {};
+}
+
+}  // namespace ff::server
