@@ -1,0 +1,68 @@
+// `fluidform serve` end to end (issue 7): the viewer in Debian's chromium, headless and off the network, driven by
+// playwright-core from web/test/viewer.test.mjs against the real server — frames, a screenshot with particles, the
+// HUD, dragging a target and the error rate against the moved target, path traversal and garbage messages on the
+// real port, Ctrl-C freeing the port, and the playback of a finished run with its mesh animation. The script prints
+// the speed numbers (simulation steps per second, frames received per second, render FPS); they are echoed here.
+#include "e2e/cli_support.h"
+#include "support/test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+namespace ff {
+namespace {
+namespace fs = std::filesystem;
+
+std::pair<int, std::string> shell(const std::string& cmd) {
+  std::string out;
+  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!p) return {-1, ""};
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) {
+    out += buf;
+    std::cout << buf << std::flush;  // progress of a long test is visible with ctest -V
+  }
+  const int rc = ::pclose(p);
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, out};
+}
+
+fs::path chromium() {
+  if (const char* c = std::getenv("FF_CHROMIUM")) return c;
+  for (const char* c : {"/usr/bin/chromium", "/usr/bin/chromium-browser"})
+    if (fs::exists(c)) return c;
+  return {};
+}
+
+TEST(Serve, ViewerInHeadlessChromium) {
+  const fs::path src = test::source_dir();
+  if (shell("node --version").first != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
+  if (!fs::exists(src / "node_modules" / "playwright-core" / "package.json"))
+    GTEST_SKIP() << "playwright-core is not installed: npm install (scripts/setup runs it)";
+  const fs::path browser = chromium();
+  if (browser.empty()) GTEST_SKIP() << "Debian's chromium is not installed (apt-get install chromium; scripts/test installs it)";
+  ASSERT_TRUE(fs::exists(src / "examples" / "bunny.obj")) << "run scripts/setup (it writes examples/bunny.obj)";
+
+  const fs::path dir = test::temp_dir("serve");
+  // The control-particle cache outlives the test: the default bunny is then sampled once per machine, not per run.
+  const fs::path cache = fs::temp_directory_path() / "fluidform-serve-test-cache";
+  // A finished run to play back: a small bunny, meshed every 10 frames into animation.glb.
+  e2e::write_scene(dir, R"({"targets": [{"mesh": ")" + (src / "examples" / "bunny.obj").string() +
+                            R"(", "scale": 0.1}], "sampling": {"auto_count": 1500}, "output": {"frames": 40}})");
+  const auto r = e2e::run({"run", (dir / "scene.json").string(), "-o", (dir / "run").string(), "--mesh-every", "10", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(dir / "run" / "animation.glb"));
+
+  const auto [rc, out] = shell("node '" + (src / "web" / "test" / "viewer.test.mjs").string() + "' --binary '" +
+                               test::binary().string() + "' --scene '" + (src / "examples" / "default_scene.json").string() +
+                               "' --cache '" + cache.string() + "' --playback '" + (dir / "run").string() + "' --chromium '" +
+                               browser.string() + "' --out '" + dir.string() + "'");
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("viewer test ok"), std::string::npos) << out;
+  if (rc == 0) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ff
