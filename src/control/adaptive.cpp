@@ -449,26 +449,22 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     auto r2_of = [&](const Index* j) {
       return dist2(xs, j, px, py, pz);
     };
-    // Density first; the gradient sum (a square root per pair) only for the samples that are under-filled.
-    __m128 sw = zero;
+    // Density and gradient sums in one pass over the pairs: once the fluid has arrived nearly every sample is
+    // slightly under-filled (the control holds the fluid against the PBF pressure), so the gradient sum is needed
+    // almost everywhere and a second pass would decode and gather every pair again.
+    __m128 sw = zero, g2 = zero;
     core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
       const __m128 r2 = r2_of(j);
       __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
       if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       const __m128 q2 = _mm_sub_ps(h2, r2);
       sw = _mm_add_ps(sw, select(use, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+      const __m128 q = _mm_sub_ps(h, _mm_sqrt_ps(r2));
+      const __m128 qq = _mm_mul_ps(q, q);
+      g2 = _mm_add_ps(g2, select(use, _mm_mul_ps(qq, qq)));  // |∇W|² = kgrad² (h − r)⁴
     });
     const float c = mp * poly6_.k * hsum(sw) / rho_c_[i] - 1.0f;
     if (c >= 0.0f) return;
-    __m128 g2 = zero;
-    core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
-      const __m128 r2 = r2_of(j);
-      __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
-      if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
-      const __m128 q = _mm_sub_ps(h, _mm_sqrt_ps(r2));
-      const __m128 q2 = _mm_mul_ps(q, q);
-      g2 = _mm_add_ps(g2, select(use, _mm_mul_ps(q2, q2)));  // |∇W|² = kgrad² (h − r)⁴
-    });
     const float k = mp / rho_c_[i] * spiky_.kgrad;
     lambda_[i] = -c / (k * k * hsum(g2) + eps);
   });
