@@ -28,8 +28,15 @@ const state = {
   errors: [],
   animation: { loaded: false, duration: 0, clips: 0, meshes: 0, time: 0 },
   renderedFrames: 0,
+  // Drawing on demand: a new frame, a camera move, a drag or a resize asks for one draw; nothing changing draws
+  // nothing, so an idle viewer leaves the CPU (and, on the test machine, the simulation's cores) alone. `continuous`
+  // draws every display frame (the browser test sets it to measure the render rate). An XR session always draws.
+  continuous: false,
+  xr: { presenting: false, mode: null, sessions: 0, renderedFrames: 0 },
 };
 window.__ff = state;
+let dirty = true;
+const redraw = () => (dirty = true);
 
 // Renderer, scene, camera.
 const renderer = new THREE.WebGLRenderer({ antialias: true });
@@ -47,6 +54,7 @@ const camera = new THREE.PerspectiveCamera(45, window.innerWidth / window.innerH
 camera.position.set(1.6, 1.2, 2.4);
 const controls = new OrbitControls(camera, renderer.domElement);
 controls.enableDamping = true;
+controls.addEventListener('change', redraw);
 const grid = new THREE.GridHelper(4, 40, 0x334455, 0x222a33);
 scene.add(grid);
 
@@ -63,6 +71,7 @@ function resize() {
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
   particles.setViewport(window.innerHeight * renderer.getPixelRatio(), camera.fov);
+  redraw();
 }
 window.addEventListener('resize', resize);
 resize();
@@ -120,6 +129,7 @@ function onFrame(buffer) {
     state.animation.time = time;
   }
   hud.update({ stepMs, simFps, count, errorRate, time });
+  redraw();
 }
 
 function onText(text) {
@@ -134,6 +144,7 @@ function onText(text) {
     state.poses[m.target] = m;
     state.poseAcks += 1;
     if (!(boxes.drag && boxes.drag.index === m.target)) boxes.applyPose(m.target, m);
+    redraw();
   } else if (m.type === 'error') {
     state.errors.push(m.message);
     hud.status(m.message);
@@ -157,6 +168,7 @@ function onHello(h) {
   h.targets?.forEach((t, i) => (state.poses[i] = t.pose));
   if (!framed) frameCamera(h);
   if (h.animation && !meshRoot) loadAnimation(h.animation);
+  redraw();
 }
 
 // Looks at the targets (or the domain) from a distance that fits them.
@@ -193,6 +205,7 @@ function loadAnimation(url) {
     for (const clip of gltf.animations) mixer.clipAction(clip).play();
     state.animation = { loaded: true, duration: gltf.animations[0]?.duration ?? 0, clips: gltf.animations.length, meshes, time: 0 };
     meshRoot.visible = $('chk-mesh').checked;
+    redraw();
   }, undefined, (e) => state.errors.push(`animation: ${e.message ?? e}`));
 }
 
@@ -205,8 +218,8 @@ $('btn-play').onclick = () => {
 $('btn-restart').onclick = () => send(protocol.restart());
 $('sel-controller').onchange = (e) => send(protocol.setController(state.hello.controllers[Number(e.target.value)]));
 $('sel-mesh').onchange = (e) => send(protocol.setMesh(0, Number(e.target.value)));
-$('chk-particles').onchange = (e) => (particles.points.visible = e.target.checked);
-$('chk-mesh').onchange = (e) => meshRoot && (meshRoot.visible = e.target.checked);
+$('chk-particles').onchange = (e) => { particles.points.visible = e.target.checked; redraw(); };
+$('chk-mesh').onchange = (e) => { if (meshRoot) meshRoot.visible = e.target.checked; redraw(); };
 
 // Mouse dragging of targets (orbit controls are off while a target is held).
 const pointer = new THREE.Vector2();
@@ -226,7 +239,11 @@ renderer.domElement.addEventListener('pointerdown', (ev) => {
     renderer.domElement.setPointerCapture(ev.pointerId);
   }
 }, { capture: true });  // capture: runs before the orbit controls' own listener on the canvas
-renderer.domElement.addEventListener('pointermove', (ev) => boxes.drag && boxes.move(rayAt(ev)));
+renderer.domElement.addEventListener('pointermove', (ev) => {
+  if (!boxes.drag) return;
+  boxes.move(rayAt(ev));
+  redraw();
+});
 const release = () => {
   if (!boxes.drag) return;
   boxes.end();
@@ -235,7 +252,8 @@ const release = () => {
 renderer.domElement.addEventListener('pointerup', release);
 renderer.domElement.addEventListener('pointercancel', release);
 
-// XR controllers: point at a target box and hold the trigger to carry it.
+// XR controllers: point at a target box and hold the trigger to carry it; hold the grip (squeeze) too to turn it
+// about the vertical axis instead.
 for (let i = 0; i < 2; ++i) {
   const ctl = renderer.xr.getController(i);
   const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(0, 0, -1)]),
@@ -248,10 +266,12 @@ for (let i = 0; i < 2; ++i) {
     const origin = new THREE.Vector3().setFromMatrixPosition(ctl.matrixWorld);
     return new THREE.Ray(origin, new THREE.Vector3(0, 0, -1).applyMatrix4(m).normalize());
   };
+  ctl.addEventListener('squeezestart', () => (ctl.userData.squeezing = true));
+  ctl.addEventListener('squeezeend', () => (ctl.userData.squeezing = false));
   ctl.addEventListener('selectstart', () => {
     if (state.hello?.mode !== 'live') return;
     const ray = ctlRay();
-    if (boxes.begin(ray, ray.direction.clone().negate())) ctl.userData.dragging = true;
+    if (boxes.begin(ray, ray.direction.clone().negate(), Boolean(ctl.userData.squeezing))) ctl.userData.dragging = true;
   });
   ctl.addEventListener('selectend', () => {
     if (ctl.userData.dragging) boxes.end();
@@ -260,22 +280,37 @@ for (let i = 0; i < 2; ++i) {
   ctl.userData.ray = ctlRay;
 }
 
-// In AR the content is placed 1.5 m in front of the viewer at a table-top size.
+// In an immersive session the viewer stands at the origin of its floor: the content is put in front of them, on
+// the floor at full size in VR, and at table-top size (about half a metre across) 1.2 m ahead in AR.
+function placeForXr(ar) {
+  const box = new THREE.Box3();
+  for (const t of state.hello?.targets ?? []) box.expandByPoint(new THREE.Vector3(...t.box.min)).expandByPoint(new THREE.Vector3(...t.box.max));
+  if (box.isEmpty() && state.hello?.domain) box.set(new THREE.Vector3(...state.hello.domain.min), new THREE.Vector3(...state.hello.domain.max));
+  if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, 0, -0.5), new THREE.Vector3(0.5, 1, 0.5));
+  const c = box.getCenter(new THREE.Vector3()), r = Math.max(1e-3, 0.5 * box.getSize(new THREE.Vector3()).length());
+  const s = ar ? Math.min(1, 0.25 / r) : 1;
+  world.scale.setScalar(s);
+  // World point p goes to s·p + position: the box's bottom centre to (0, floor or table, −distance).
+  const ahead = ar ? 1.2 : 1.0 + r;
+  world.position.set(-s * c.x, (ar ? 0.8 : 0) - s * box.min.y, -ahead - s * c.z);
+}
 renderer.xr.addEventListener('sessionstart', () => {
   const session = renderer.xr.getSession();
-  const ar = session && session.environmentBlendMode && session.environmentBlendMode !== 'opaque';
+  const ar = Boolean(session && session.environmentBlendMode && session.environmentBlendMode !== 'opaque');
+  state.xr = { ...state.xr, presenting: true, mode: ar ? 'immersive-ar' : 'immersive-vr', sessions: state.xr.sessions + 1 };
+  placeForXr(ar);
   if (ar) {
-    world.scale.setScalar(0.4);
-    world.position.set(0, 0.8, -1.5);
     scene.background = null;
     grid.visible = false;
   }
 });
 renderer.xr.addEventListener('sessionend', () => {
+  state.xr = { ...state.xr, presenting: false };
   world.scale.setScalar(1);
   world.position.set(0, 0, 0);
   scene.background = new THREE.Color(0x111418);
   grid.visible = true;
+  redraw();
 });
 
 // Render loop (the XR loop when a session is on).
@@ -286,17 +321,22 @@ renderer.setAnimationLoop((now) => {
     if (ctl.userData.dragging) boxes.move(ctl.userData.ray());
   }
   if (!renderer.xr.isPresenting) controls.update();
-  renderer.render(scene, camera);
-  state.renderedFrames += 1;
-  renderRate.tick(now);
   if (now - lastHud > 250) {
     lastHud = now;
     hud.update({ fps: renderRate.rate(now), recvFps: recvRate.rate(now) });
     state.hud = { ...hud.values };
   }
+  if (renderer.xr.isPresenting) state.xr.renderedFrames += 1;
+  else if (!dirty && !state.continuous) return;
+  dirty = false;
+  renderer.render(scene, camera);
+  state.renderedFrames += 1;
+  renderRate.tick(now);
 });
 
-// For tests and tools: where target i is on screen.
+// For tests and tools: where target i is on screen, and in the world (metres, after the XR placement).
+state.targetWorld = (i) => boxes.targets[i]?.group.getWorldPosition(new THREE.Vector3()).toArray() ?? null;
+state.worldScale = () => world.scale.x;
 state.targetScreen = (i) => boxes.screenPosition(i, camera, renderer.domElement);
 state.project = (p) => {
   const v = world.localToWorld(new THREE.Vector3(...p)).project(camera);
