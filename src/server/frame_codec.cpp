@@ -83,4 +83,48 @@ Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> b) {
   return f;
 }
 
+std::vector<std::uint8_t> encode_surface(const SurfaceInfo& info, const io::TriangleMesh& mesh) {
+  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  std::vector<std::uint8_t> b(kSurfaceHeaderBytes + 12 * nv + 12 * nt, 0);
+  put(b, 0, kSurfaceMagic);
+  put(b, 4, kSurfaceVersion);
+  put(b, 6, static_cast<std::uint16_t>(kSurfaceHeaderBytes));
+  put(b, 8, info.frame);
+  put(b, 12, static_cast<std::uint32_t>(nv));
+  put(b, 16, info.time);
+  put(b, 24, static_cast<std::uint32_t>(nt));
+  put(b, 28, info.build_ms);
+  for (std::size_t i = 0; i < nv; ++i)
+    for (int a = 0; a < 3; ++a) put(b, kSurfaceHeaderBytes + 12 * i + 4 * std::size_t(a), mesh.vertices[i][a]);
+  const std::size_t tri = kSurfaceHeaderBytes + 12 * nv;
+  for (std::size_t i = 0; i < nt; ++i)
+    for (int a = 0; a < 3; ++a) put(b, tri + 12 * i + 4 * std::size_t(a), static_cast<std::uint32_t>(mesh.triangles[i][a]));
+  return b;
+}
+
+Result<DecodedSurface> decode_surface(std::span<const std::uint8_t> b) {
+  if (b.size() < kSurfaceHeaderBytes) return input_error("surface: shorter than its header");
+  if (get<std::uint32_t>(b, 0) != kSurfaceMagic) return input_error("surface: wrong magic");
+  if (get<std::uint16_t>(b, 4) != kSurfaceVersion) return input_error("surface: unknown version");
+  const std::size_t header = get<std::uint16_t>(b, 6);
+  const std::size_t nv = get<std::uint32_t>(b, 12), nt = get<std::uint32_t>(b, 24);
+  if (header < kSurfaceHeaderBytes || b.size() < header + 12 * nv + 12 * nt) return input_error("surface: shorter than its mesh");
+  DecodedSurface s;
+  s.info.frame = get<std::uint32_t>(b, 8);
+  s.info.time = get<double>(b, 16);
+  s.info.build_ms = get<float>(b, 28);
+  s.mesh.vertices.resize(nv);
+  for (std::size_t i = 0; i < nv; ++i)
+    for (int a = 0; a < 3; ++a) s.mesh.vertices[i][a] = get<float>(b, header + 12 * i + 4 * std::size_t(a));
+  s.mesh.triangles.resize(nt);
+  const std::size_t tri = header + 12 * nv;
+  for (std::size_t i = 0; i < nt; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t v = get<std::uint32_t>(b, tri + 12 * i + 4 * std::size_t(a));
+      if (v >= nv) return input_error("surface: a triangle names a vertex out of range");
+      s.mesh.triangles[i][a] = static_cast<Index>(v);
+    }
+  return s;
+}
+
 }  // namespace ff::server

@@ -61,6 +61,11 @@ Result<Command> parse_command(std::string_view text) {
     c.kind = Command::Kind::Mesh;
     FF_TRY(c.target, index(j, "target"));
     FF_TRY(c.mesh, index(j, "mesh"));
+  } else if (t == "surface") {
+    c.kind = Command::Kind::Surface;
+    const auto on = j.find("on");
+    if (on == j.end() || !on->is_boolean()) return input_error("surface: \"on\" must be true or false");
+    c.on = on->get<bool>();
   } else {
     return input_error("unknown type");
   }

@@ -5,6 +5,7 @@
 //   {"type": "controller", "name": "none"}
 //   {"type": "pose", "target": 0, "translate": [x, y, z], "rotate": [rx, ry, rz], "scale": 1}   (rotate, scale optional)
 //   {"type": "mesh", "target": 0, "mesh": 1}      (an index into the hello message's "meshes")
+//   {"type": "surface", "on": true}               (live surface: the reconstructed mesh, sent about twice a second)
 #include "app/live_scene.h"
 #include "core/error.h"
 
@@ -16,11 +17,12 @@ namespace ff::server {
 inline constexpr std::size_t kMaxClientMessage = 16 * 1024;  ///< bytes; a real command is under 200
 
 struct Command {
-  enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh } kind = Kind::Play;
+  enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh, Surface } kind = Kind::Play;
   std::size_t target = 0;
   app::LivePose pose;
   std::string name;      ///< Controller
   std::size_t mesh = 0;  ///< Mesh
+  bool on = false;       ///< Surface
 };
 
 /// Parses and checks one client message. Input error (one line, no echo of the message) for anything malformed.

@@ -9,6 +9,7 @@
 #include "server/frame_codec.h"
 #include "server/messages.h"
 #include "server/static_files.h"
+#include "surface/reconstruct.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -109,6 +110,7 @@ struct Shared {
   CommandQueue commands;
   std::atomic<bool> stop{false};
   std::atomic<bool> paused{false};
+  bool surface = false;  // live surface on (a viewer shows the mesh); the simulation thread's only
   std::mutex hello_mu;
   json hello;  // the current hello (controller, poses and meshes change it), under hello_mu
   void set_hello(json h) {
@@ -121,7 +123,7 @@ struct Shared {
   }
 };
 
-json live_hello(const app::LiveScene& s, bool paused) {
+json live_hello(const app::LiveScene& s, bool paused, bool surface) {
   json targets = json::array();
   for (std::size_t t = 0; t < s.targets().size(); ++t) {
     const auto& lt = s.targets()[t];
@@ -146,7 +148,26 @@ json live_hello(const app::LiveScene& s, bool paused) {
           {"targets", targets},
           {"domain", {{"min", vec(d.min)}, {"max", vec(d.max)}}},
           {"paused", paused},
+          {"surface", surface},
           {"animation", nullptr}};
+}
+
+// The live surface: the current particles reconstructed (surface::reconstruct, the scene's surface defaults) into
+// the mesh the viewer shows. Made on the simulation thread between frames, at most every kSurfaceEvery seconds of
+// wall time: 10k particles take ~0.1 s, so the simulation keeps most of its time.
+constexpr double kSurfaceEvery = 0.5;
+
+void publish_surface(Shared& sh, const app::LiveScene& scene) {
+  core::Stopwatch clock;
+  const auto& x = scene.particles().position;
+  if (x.empty()) return;
+  auto mesh = surface::reconstruct(x, scene.scene().solver.spacing(), surface::SurfaceParams{});
+  if (!mesh) {
+    spdlog::warn("serve: live surface: {}", mesh.error().message);
+    return;
+  }
+  const SurfaceInfo info{static_cast<std::uint32_t>(scene.frame()), scene.time(), static_cast<float>(1e3 * clock.seconds())};
+  sh.server->publish_surface(std::make_shared<const std::vector<std::uint8_t>>(encode_surface(info, *mesh)));
 }
 
 void publish(Shared& sh, const FrameInfo& info, const sim::ParticleSet& p) {
@@ -166,7 +187,8 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
   core::Stopwatch clock;
   double next_due = 0.0;
   std::uint64_t frames = 0;
-  double step_total = 0.0;
+  double step_total = 0.0, last_surface = -kSurfaceEvery;
+  int surface_frame = -1;
   publish(sh, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0}, scene.particles());
   while (!sh.stop) {
     for (Command& c : sh.commands.take()) {
@@ -187,15 +209,24 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
           break;
         }
         case Command::Kind::Mesh: st = scene.set_mesh(c.target, c.mesh, progress); break;
+        case Command::Kind::Surface:
+          sh.surface = c.on;
+          last_surface = -kSurfaceEvery, surface_frame = -1;  // one now, whatever the last one was
+          break;
       }
       if (!st.ok()) error_text(sh, st.error().message);
       if (c.kind != Command::Kind::Pose) {
-        sh.set_hello(live_hello(scene, sh.paused));
+        sh.set_hello(live_hello(scene, sh.paused, sh.surface));
         // Everyone learns the new state (controller, meshes, paused) the way a new client would.
         sh.server->broadcast_text(sh.hello_text());
       } else {
-        sh.set_hello(live_hello(scene, sh.paused));
+        sh.set_hello(live_hello(scene, sh.paused, sh.surface));
       }
+    }
+    if (sh.surface && scene.frame() != surface_frame && clock.seconds() - last_surface >= kSurfaceEvery) {
+      last_surface = clock.seconds();
+      surface_frame = scene.frame();
+      publish_surface(sh, scene);
     }
     if (sh.paused) {
       sh.commands.wait(0.05, sh.stop);
@@ -206,7 +237,7 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
     if (!f) {
       error_text(sh, fmt::format("the simulation stopped: {}; restart to go on", f.error().message));
       sh.paused = true;
-      sh.set_hello(live_hello(scene, true));
+      sh.set_hello(live_hello(scene, true, sh.surface));
       continue;
     }
     ++frames;
@@ -339,7 +370,7 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
     lo.extra_meshes = opt.meshes;
     FF_TRY(live, app::LiveScene::create(scene, lo, progress));
     spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
-    sh.set_hello(live_hello(*live, false));
+    sh.set_hello(live_hello(*live, false, false));
   }
   const StaticFiles files(mounts);
 

@@ -67,7 +67,8 @@ struct WsServer::Impl {
 
 // One WebSocket client. Text messages out are queued (they are few and each matters: pose acknowledgements); binary
 // frames are not: `pending_` holds only the newest, replaced whenever a newer one comes before the write of the
-// previous one has finished.
+// previous one has finished. Live surfaces (much rarer, larger) have their own newest-only slot, `surface_`, so a
+// particle frame never pushes out a surface nor the other way round.
 class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(tcp::socket&& socket, WsServer::Impl& server) : ws_(std::move(socket)), server_(server) {}
@@ -84,6 +85,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   void queue_frame(std::shared_ptr<const Bytes> frame) {
     if (pending_) server_.frames_skipped.fetch_add(1, std::memory_order_relaxed);
     pending_ = std::move(frame);
+    write_next();
+  }
+  void queue_surface(std::shared_ptr<const Bytes> surface) {
+    surface_ = std::move(surface);
     write_next();
   }
   void queue_text(std::shared_ptr<const std::string> text) {
@@ -144,9 +149,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       writing_ = true;
       ws_.async_write(net::buffer(*out_text_),
                       [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_write(ec, false); });
-    } else if (pending_) {
-      out_frame_ = std::move(pending_);
-      pending_.reset();
+    } else if (pending_ || surface_) {
+      // Alternate when both wait: a stream of frames must not starve the surface, nor a surface the frames.
+      const bool take_surface = surface_ && (!pending_ || !last_was_surface_);
+      auto& slot = take_surface ? surface_ : pending_;
+      last_was_surface_ = take_surface;
+      out_frame_ = std::move(slot);
+      slot.reset();
       ws_.binary(true);
       writing_ = true;
       ws_.async_write(net::buffer(*out_frame_),
@@ -157,12 +166,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     writing_ = false;
     out_text_.reset(), out_frame_.reset();
     if (ec) return gone();
-    if (frame) server_.frames_sent.fetch_add(1, std::memory_order_relaxed);
+    if (frame && !last_was_surface_) server_.frames_sent.fetch_add(1, std::memory_order_relaxed);
     write_next();
   }
   void gone() {
     open_ = false;
     pending_.reset();
+    surface_.reset();
     texts_.clear();
     std::erase_if(server_.sessions, [this](const auto& w) {
       const auto s = w.lock();
@@ -174,8 +184,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   websocket::stream<beast::tcp_stream> ws_;
   WsServer::Impl& server_;
   beast::flat_buffer in_;
-  bool open_ = false, writing_ = false, dropping_ = false;
-  std::shared_ptr<const Bytes> pending_, out_frame_;
+  bool open_ = false, writing_ = false, dropping_ = false, last_was_surface_ = false;
+  std::shared_ptr<const Bytes> pending_, surface_, out_frame_;
   std::shared_ptr<const std::string> out_text_;
   std::deque<std::shared_ptr<const std::string>> texts_;
 };
@@ -307,6 +317,13 @@ void WsServer::publish_frame(std::shared_ptr<const std::vector<std::uint8_t>> fr
   net::post(impl_->ioc, [this, frame = std::move(frame)] {
     for (auto& w : impl_->sessions)
       if (auto s = w.lock()) s->queue_frame(frame);
+  });
+}
+
+void WsServer::publish_surface(std::shared_ptr<const std::vector<std::uint8_t>> surface) {
+  net::post(impl_->ioc, [this, surface = std::move(surface)] {
+    for (auto& w : impl_->sessions)
+      if (auto s = w.lock()) s->queue_surface(surface);
   });
 }
 

@@ -52,6 +52,8 @@ class WsServer {
   /// The newest frame, for every client (thread-safe). A client still writing the previous one gets only the
   /// latest when it is done: frames in between are skipped, never queued.
   void publish_frame(std::shared_ptr<const std::vector<std::uint8_t>> frame);
+  /// The newest live surface (frame_codec.h), for every client (thread-safe), in its own newest-only slot.
+  void publish_surface(std::shared_ptr<const std::vector<std::uint8_t>> surface);
   /// A text message (JSON) for every client, in order (thread-safe).
   void broadcast_text(std::string text);
   /// Closes the listener and every connection and joins the thread; the port is free afterwards. Idempotent.

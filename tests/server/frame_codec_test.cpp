@@ -1,5 +1,6 @@
-// The frame layout both ways: C++ encode → C++ decode (quantisation within half a step), and C++ encode → node
-// decode with web/src/protocol.js (web/test/protocol_roundtrip.mjs), so the two documented layouts cannot drift.
+// The frame and live-surface layouts both ways: C++ encode → C++ decode (frames: quantisation within half a step;
+// surfaces: exact), and C++ encode → node decode with web/src/protocol.js (web/test/protocol_roundtrip.mjs), so the
+// two documented layouts cannot drift.
 #include "server/frame_codec.h"
 #include "support/test_support.h"
 
@@ -8,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 
 namespace ff::server {
@@ -62,6 +64,43 @@ TEST(FrameCodec, EmptyNonFiniteAndTruncated) {
   EXPECT_FALSE(decode_frame(bytes));
 }
 
+io::TriangleMesh sample_mesh() {
+  io::TriangleMesh m;
+  for (int i = 0; i < 300; ++i) m.vertices.push_back(Vec3f(0.001f * float(i), std::cos(0.3f * float(i)), -1.25f + 0.5f * float(i % 7)));
+  for (Index i = 0; i + 2 < 300; ++i) m.triangles.push_back({i, i + 1, i + 2});
+  return m;
+}
+
+TEST(SurfaceCodec, RoundTripIsExact) {
+  const auto mesh = sample_mesh();
+  const SurfaceInfo info{17, 2.25, 93.5f};
+  const auto bytes = encode_surface(info, mesh);
+  EXPECT_EQ(bytes.size(), kSurfaceHeaderBytes + 12 * mesh.vertices.size() + 12 * mesh.triangles.size());
+  EXPECT_FALSE(decode_frame(bytes)) << "a surface is not a particle frame";
+  auto d = decode_surface(bytes);
+  ASSERT_TRUE(d) << d.error().message;
+  EXPECT_EQ(d->info.frame, 17u);
+  EXPECT_DOUBLE_EQ(d->info.time, 2.25);
+  EXPECT_FLOAT_EQ(d->info.build_ms, 93.5f);
+  EXPECT_EQ(d->mesh.vertices, mesh.vertices);
+  EXPECT_EQ(d->mesh.triangles, mesh.triangles);
+  auto empty = decode_surface(encode_surface(SurfaceInfo{}, io::TriangleMesh{}));
+  ASSERT_TRUE(empty);
+  EXPECT_TRUE(empty->mesh.vertices.empty());
+  // Truncated, a wrong magic, a triangle naming a vertex that is not there: refused.
+  auto cut = bytes;
+  cut.resize(cut.size() - 1);
+  EXPECT_FALSE(decode_surface(cut));
+  auto bad = bytes;
+  const std::uint32_t far = 300;
+  std::memcpy(bad.data() + kSurfaceHeaderBytes + 12 * 300, &far, 4);
+  EXPECT_FALSE(decode_surface(bad));
+  bad = bytes;
+  bad[0] ^= 1;
+  EXPECT_FALSE(decode_surface(bad));
+  EXPECT_FALSE(decode_surface(encode_frame(FrameInfo{}, sample_positions(10), {})));
+}
+
 // C++ encodes, node decodes with web/src/protocol.js and compares with what C++ decoded (to 1e-6 relative).
 TEST(FrameCodec, NodeDecodesWhatCppEncodes) {
   if (std::system("node --version > /dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
@@ -94,6 +133,31 @@ TEST(FrameCodec, NodeDecodesWhatCppEncodes) {
   const int rc = ::pclose(p);
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("protocol round trip ok"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+// The live surface the same way: C++ encodes, node decodes (exactly: floats and indices go as they are).
+TEST(SurfaceCodec, NodeDecodesWhatCppEncodes) {
+  if (std::system("node --version > /dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
+  const fs::path dir = test::temp_dir("surface-codec");
+  const auto mesh = sample_mesh();
+  const auto bytes = encode_surface(SurfaceInfo{5, 1.0 / 3.0, 12.75f}, mesh);
+  std::ofstream(dir / "surface.bin", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  nlohmann::json pos = nlohmann::json::array(), idx = nlohmann::json::array();
+  for (const auto& v : mesh.vertices) pos.push_back({v.x(), v.y(), v.z()});
+  for (const auto& t : mesh.triangles) idx.push_back({t[0], t[1], t[2]});
+  const nlohmann::json want = {{"frame", 5}, {"time", 1.0 / 3.0}, {"buildMs", 12.75}, {"positions", pos}, {"triangles", idx}};
+  std::ofstream(dir / "expected.json") << want.dump();
+  const std::string cmd = "node '" + (test::source_dir() / "web" / "test" / "protocol_roundtrip.mjs").string() + "' --surface '" +
+                          (dir / "surface.bin").string() + "' '" + (dir / "expected.json").string() + "' 2>&1";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  const int rc = ::pclose(p);
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("surface round trip ok"), std::string::npos) << out;
   fs::remove_all(dir);
 }
 

@@ -23,6 +23,11 @@ TEST(Messages, Commands) {
   EXPECT_EQ(parse_command(R"({"type":"pause"})")->kind, Command::Kind::Pause);
   EXPECT_EQ(parse_command(R"({"type":"restart"})")->kind, Command::Kind::Restart);
   EXPECT_EQ(parse_command(R"({"type":"mesh","target":0,"mesh":2})")->mesh, 2u);
+  c = parse_command(R"({"type":"surface","on":true})");
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->kind, Command::Kind::Surface);
+  EXPECT_TRUE(c->on);
+  EXPECT_FALSE(parse_command(R"({"type":"surface","on":false})")->on);
 }
 
 TEST(Messages, GarbageIsRefused) {
@@ -32,7 +37,8 @@ TEST(Messages, GarbageIsRefused) {
         R"({"type":"pose","target":0,"translate":[0,0]})", R"({"type":"pose","target":0,"translate":["a",0,0]})",
         R"({"type":"pose","target":0,"translate":[1e300,0,0]})", R"({"type":"pose","target":0,"translate":[0,0,0],"scale":0})",
         R"({"type":"pose","target":0.5,"translate":[0,0,0]})", R"({"type":"controller"})", R"({"type":"controller","name":7})",
-        R"({"type":"mesh","target":0})", "\xff\xfe\x00garbage"})
+        R"({"type":"mesh","target":0})", R"({"type":"surface"})", R"({"type":"surface","on":1})",
+        "\xff\xfe\x00garbage"})
     EXPECT_FALSE(parse_command(bad)) << bad;
   EXPECT_FALSE(parse_command(std::string(kMaxClientMessage + 1, ' ')));
 }

@@ -180,6 +180,36 @@ TEST_F(WsServerTest, SlowClientGetsTheNewestFrameNotAQueue) {
   EXPECT_GT(server_->stats().frames_skipped, 0u);
 }
 
+// A live surface has its own slot: a stream of frames does not push it out, and it arrives beside them.
+TEST_F(WsServerTest, SurfaceArrivesBesideTheFrames) {
+  start();
+  RawWebSocket ws(port_);
+  ASSERT_EQ(ws.status(), 101);
+  ASSERT_TRUE(ws.read());  // hello
+  io::TriangleMesh mesh;
+  mesh.vertices = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+  mesh.triangles = {{0, 1, 2}};
+  server_->publish_frame(frame(1, 200'000));
+  server_->publish_surface(std::make_shared<const std::vector<std::uint8_t>>(encode_surface(SurfaceInfo{1, 0.5, 3.0f}, mesh)));
+  for (std::uint32_t k = 2; k <= 20; ++k) server_->publish_frame(frame(k, 200'000));
+  bool surface = false;
+  std::uint32_t last = 0;
+  while (last != 20 || !surface) {
+    auto m = ws.read();
+    ASSERT_TRUE(m) << "the surface or the last frame never came";
+    const std::span bytes(reinterpret_cast<const std::uint8_t*>(m->payload.data()), m->payload.size());
+    if (auto s = decode_surface(bytes)) {
+      EXPECT_FALSE(surface) << "one surface was published";
+      EXPECT_EQ(s->mesh.triangles.size(), 1u);
+      surface = true;
+    } else {
+      auto d = decode_frame(bytes);
+      ASSERT_TRUE(d);
+      last = d->info.frame;
+    }
+  }
+}
+
 TEST_F(WsServerTest, StopFreesThePort) {
   start();
   {

@@ -33,6 +33,7 @@ const state = {
   // draws every display frame (the browser test sets it to measure the render rate). An XR session always draws.
   continuous: false,
   xr: { presenting: false, mode: null, sessions: 0, renderedFrames: 0 },
+  surface: { received: 0, vertices: 0, triangles: 0, frame: -1, buildMs: NaN },  // the newest live surface
 };
 window.__ff = state;
 let dirty = true;
@@ -101,7 +102,11 @@ function connect() {
     hud.status('disconnected; retrying…');
     setTimeout(connect, 1000);
   };
-  ws.onmessage = (ev) => (typeof ev.data === 'string' ? onText(ev.data) : onFrame(ev.data));
+  ws.onmessage = (ev) => {
+    if (typeof ev.data === 'string') onText(ev.data);
+    else if (protocol.isSurface(ev.data)) onSurface(ev.data);
+    else onFrame(ev.data);
+  };
 }
 
 let decoded = null;
@@ -132,6 +137,33 @@ function onFrame(buffer) {
   redraw();
 }
 
+// The live surface: one mesh, its geometry replaced by each new surface.
+const surfaceMaterial = new THREE.MeshStandardMaterial({ color: 0x9ecbff, roughness: 0.35, metalness: 0.0, transparent: true, opacity: 0.85 });
+let liveSurface = null;
+function onSurface(buffer) {
+  let s;
+  try {
+    s = protocol.decodeSurface(buffer);
+  } catch (e) {
+    state.badFrames += 1;
+    return;
+  }
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(s.positions, 3));
+  g.setIndex(new THREE.BufferAttribute(s.indices, 1));
+  g.computeVertexNormals();
+  if (!liveSurface) {
+    liveSurface = new THREE.Mesh(g, surfaceMaterial);
+    world.add(liveSurface);
+  } else {
+    liveSurface.geometry.dispose();
+    liveSurface.geometry = g;
+  }
+  liveSurface.visible = $('chk-mesh').checked;
+  state.surface = { received: state.surface.received + 1, vertices: s.vertices, triangles: s.triangles, frame: s.frame, buildMs: s.buildMs };
+  redraw();
+}
+
 function onText(text) {
   let m;
   try {
@@ -158,6 +190,9 @@ function fillSelect(sel, items, current) {
 
 let framed = false;
 function onHello(h) {
+  // Live: the mesh box starts as the server has it (off: reconstructing costs simulation time); playback has the
+  // run's animation.glb and keeps the box as it is.
+  if (h.mode === 'live' && !state.hello) $('chk-mesh').checked = Boolean(h.surface);
   state.hello = h;
   hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
@@ -219,7 +254,12 @@ $('btn-restart').onclick = () => send(protocol.restart());
 $('sel-controller').onchange = (e) => send(protocol.setController(state.hello.controllers[Number(e.target.value)]));
 $('sel-mesh').onchange = (e) => send(protocol.setMesh(0, Number(e.target.value)));
 $('chk-particles').onchange = (e) => { particles.points.visible = e.target.checked; redraw(); };
-$('chk-mesh').onchange = (e) => { if (meshRoot) meshRoot.visible = e.target.checked; redraw(); };
+$('chk-mesh').onchange = (e) => {
+  if (meshRoot) meshRoot.visible = e.target.checked;
+  if (liveSurface) liveSurface.visible = e.target.checked;
+  if (state.hello?.mode === 'live') send(protocol.setSurface(e.target.checked));
+  redraw();
+};
 
 // Mouse dragging of targets (orbit controls are off while a target is held).
 const pointer = new THREE.Vector2();

@@ -21,6 +21,19 @@
 //   64+6n   u8[n]     target of each particle (255: free fluid)
 //   ...     0–3 zero bytes to a multiple of 4
 //
+// Live surface (the reconstructed mesh of a recent frame, while a viewer asked for it), told apart by its magic:
+//   offset  type      field
+//   0       u32       magic 0x314D4646 (the bytes "FFM1")
+//   4       u16       version (1)
+//   6       u16       header bytes (32): vertices start here
+//   8       u32       frame number the surface was made from
+//   12      u32       nv, vertices
+//   16      f64       time, s simulated
+//   24      u32       nt, triangles
+//   28      f32       build_ms: wall-clock of the reconstruction
+//   32      f32[3nv]  vertex positions, m
+//   32+12nv u32[3nt]  triangles (vertex indices, outward winding)
+//
 // Text messages are JSON objects with a "type": from the server "hello" (the scene: targets, meshes, controllers,
 // mode), "pose" (a target's applied transform), "error"; to the server the commands below.
 
@@ -28,6 +41,32 @@ export const FRAME_MAGIC = 0x31504646;
 export const FRAME_VERSION = 1;
 export const FRAME_HEADER_BYTES = 64;
 export const FREE_FLUID = 255;
+export const SURFACE_MAGIC = 0x314d4646;
+export const SURFACE_VERSION = 1;
+export const SURFACE_HEADER_BYTES = 32;
+
+/** Whether a binary message is a live surface (else a particle frame). */
+export const isSurface = (buffer) => buffer.byteLength >= 4 && new DataView(buffer).getUint32(0, true) === SURFACE_MAGIC;
+
+/**
+ * Decodes one live surface: {frame, time, buildMs, positions: Float32Array(3nv), indices: Uint32Array(3nt)}.
+ * Throws on a wrong magic, version or size, or an index out of range.
+ * @param {ArrayBuffer} buffer
+ */
+export function decodeSurface(buffer) {
+  if (buffer.byteLength < SURFACE_HEADER_BYTES) throw new Error('surface: shorter than its header');
+  const v = new DataView(buffer);
+  if (v.getUint32(0, true) !== SURFACE_MAGIC) throw new Error('surface: wrong magic');
+  if (v.getUint16(4, true) !== SURFACE_VERSION) throw new Error('surface: unknown version');
+  const header = v.getUint16(6, true), nv = v.getUint32(12, true), nt = v.getUint32(24, true);
+  if (header < SURFACE_HEADER_BYTES || header % 4 || buffer.byteLength < header + 12 * nv + 12 * nt)
+    throw new Error('surface: shorter than its mesh');
+  const positions = new Float32Array(buffer, header, 3 * nv);
+  const indices = new Uint32Array(buffer, header + 12 * nv, 3 * nt);
+  for (let i = 0; i < indices.length; ++i) if (indices[i] >= nv) throw new Error('surface: a triangle names a vertex out of range');
+  return { frame: v.getUint32(8, true), time: v.getFloat64(16, true), buildMs: v.getFloat32(28, true),
+           vertices: nv, triangles: nt, positions, indices };
+}
 
 /**
  * Decodes one binary frame. `out` (optional) is a previous result whose arrays are reused when large enough.
@@ -74,6 +113,8 @@ export const pause = () => JSON.stringify({ type: 'pause' });
 export const restart = () => JSON.stringify({ type: 'restart' });
 export const setController = (name) => JSON.stringify({ type: 'controller', name });
 export const setMesh = (target, mesh) => JSON.stringify({ type: 'mesh', target, mesh });
+/** Live surface on or off (the server reconstructs the fluid about twice a second while on). */
+export const setSurface = (on) => JSON.stringify({ type: 'surface', on: Boolean(on) });
 /** A target's pose about its pivot: translate (m), rotate (degrees about x, y, z; R = Rz Ry Rx), uniform scale. */
 export const setPose = (target, translate, rotate = [0, 0, 0], scale = 1) =>
   JSON.stringify({ type: 'pose', target, translate, rotate, scale });

@@ -206,6 +206,23 @@ try {
     summary.screenshot_coloured_pixels = px.coloured;
     check(px.coloured > 0.005 * px.total, `screenshot shows particles (${px.coloured} coloured pixels of ${px.total})`);
 
+    // The live surface: ticking "mesh" asks the server to reconstruct the fluid about twice a second; the mesh
+    // arrives and is drawn; unticking stops it.
+    check(await page.evaluate(() => !document.getElementById('chk-mesh').checked && window.__ff.hello.surface === false),
+          'live: the mesh starts off (reconstruction costs simulation time)');
+    await page.check('#chk-mesh');
+    if (await waitFor(page, () => window.__ff.surface.received >= 2 && window.__ff.surface.triangles > 500, null, 30_000,
+                      'live surface arrives')) {
+      const s = await page.evaluate(() => window.__ff.surface);
+      summary.live_surface = s;
+      const meshShot = await page.screenshot({ path: path.join(outDir, 'live-mesh.png') });
+      const mpx = await colouredPixels(page, meshShot);
+      check(mpx.coloured > px.coloured, `live surface: ${s.received} meshes, the last ${s.triangles} triangles from frame ` +
+                                        `${s.frame}, built in ${s.buildMs.toFixed(0)} ms; drawn (${mpx.coloured} coloured pixels)`);
+    }
+    await page.uncheck('#chk-mesh');
+    check(await waitFor(page, () => window.__ff.hello.surface === false, null, 10_000, 'live surface off'), 'live surface off again');
+
     // Garbage over a second WebSocket: the server logs and ignores each message (an oversized one too) and that
     // client stays connected and keeps receiving frames; the viewer's stream goes on.
     const garbage = await page.evaluate(async () => {
