@@ -190,9 +190,13 @@ function fillSelect(sel, items, current) {
 
 let framed = false;
 function onHello(h) {
-  // Live: the mesh box starts as the server has it (off: reconstructing costs simulation time); playback has the
-  // run's animation.glb and keeps the box as it is.
-  if (h.mode === 'live' && !state.hello) $('chk-mesh').checked = Boolean(h.surface);
+  // Live: the mesh box shows what the server does (off at first: reconstructing costs simulation time); every
+  // viewer follows when one of them turns it on or off, and a reconnect to a fresh server starts off again.
+  // Playback has the run's animation.glb and keeps the box as it is.
+  if (h.mode === 'live') {
+    $('chk-mesh').checked = Boolean(h.surface);
+    if (liveSurface) liveSurface.visible = Boolean(h.surface);
+  }
   state.hello = h;
   hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
