@@ -21,16 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace e2e;
 
-// Runs a shell command, returns its exit code and output (stdout and stderr).
-std::pair<int, std::string> shell(const std::string& cmd) {
-  std::string out;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return {-1, ""};
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int rc = ::pclose(p);
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, out};
-}
+using test::shell;
 
 // The JSON line a checker script printed after `prefix` (or the whole output when there is no prefix).
 nlohmann::json json_line(const std::string& out, const std::string& prefix = "") {

@@ -13,26 +13,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
-#include <iostream>
 
 namespace ff {
 namespace {
 namespace fs = std::filesystem;
 
-std::pair<int, std::string> shell(const std::string& cmd) {
-  std::string out;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return {-1, ""};
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) {
-    out += buf;
-    std::cout << buf << std::flush;  // progress of a long test is visible with ctest -V
-  }
-  const int rc = ::pclose(p);
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, out};
-}
+using test::shell;
 
 fs::path chromium() {
   if (const char* c = std::getenv("FF_CHROMIUM")) return c;
@@ -71,8 +58,9 @@ TEST(Serve, ViewerInHeadlessChromium) {
 
   const auto [rc, out] = shell("node '" + (src / "web" / "test" / "viewer.test.mjs").string() + "' --binary '" +
                                test::binary().string() + "' --scene '" + (src / "examples" / "default_scene.json").string() +
-                               "' --cache '" + cache.string() + "' --mesh '" + (dir / "sphere.obj").string() + "' --playback '" + (dir / "run").string() + "' --chromium '" +
-                               browser.string() + "' --out '" + dir.string() + "'");
+                               "' --cache '" + cache.string() + "' --mesh '" + (dir / "sphere.obj").string() +
+                               "' --playback '" + (dir / "run").string() + "' --chromium '" +
+                               browser.string() + "' --out '" + dir.string() + "'", /*echo=*/true);
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("viewer test ok"), std::string::npos) << out;
   if (rc == 0) fs::remove_all(dir);

@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 
@@ -101,6 +100,17 @@ TEST(SurfaceCodec, RoundTripIsExact) {
   EXPECT_FALSE(decode_surface(encode_frame(FrameInfo{}, sample_positions(10), {})));
 }
 
+// Runs web/test/protocol_roundtrip.mjs (`mode`: "" for a frame, "--surface" for a surface) on the bytes C++ wrote
+// and the values C++ expects; its exit code and output.
+std::pair<int, std::string> node_roundtrip(const fs::path& dir, const std::string& mode) {
+  return test::shell("node '" + (test::source_dir() / "web" / "test" / "protocol_roundtrip.mjs").string() + "' " + mode +
+                     " '" + (dir / "data.bin").string() + "' '" + (dir / "expected.json").string() + "'");
+}
+
+void write_bytes(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
 // C++ encodes, node decodes with web/src/protocol.js and compares with what C++ decoded (to 1e-6 relative).
 TEST(FrameCodec, NodeDecodesWhatCppEncodes) {
   if (std::system("node --version > /dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
@@ -110,7 +120,7 @@ TEST(FrameCodec, NodeDecodesWhatCppEncodes) {
   for (std::size_t i = 0; i < t.size(); ++i) t[i] = std::uint8_t(i % 5 == 4 ? 255 : i % 4);
   const FrameInfo info{7, 123.456789012345, 3.5f, NAN, 61.25f, 4000};
   const auto bytes = encode_frame(info, x, t);
-  std::ofstream(dir / "frame.bin", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  write_bytes(dir / "data.bin", bytes);
   auto d = decode_frame(bytes);
   ASSERT_TRUE(d);
   nlohmann::json want = {{"frame", 7}, {"count", x.size()}, {"time", info.time}, {"stepMs", 3.5}, {"errorRate", nullptr},
@@ -123,14 +133,7 @@ TEST(FrameCodec, NodeDecodesWhatCppEncodes) {
   want["positions"] = pos;
   want["targets"] = tg;
   std::ofstream(dir / "expected.json") << want.dump();
-  const std::string cmd = "node '" + (test::source_dir() / "web" / "test" / "protocol_roundtrip.mjs").string() + "' '" +
-                          (dir / "frame.bin").string() + "' '" + (dir / "expected.json").string() + "' 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int rc = ::pclose(p);
+  const auto [rc, out] = node_roundtrip(dir, "");
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("protocol round trip ok"), std::string::npos) << out;
   fs::remove_all(dir);
@@ -142,20 +145,13 @@ TEST(SurfaceCodec, NodeDecodesWhatCppEncodes) {
   const fs::path dir = test::temp_dir("surface-codec");
   const auto mesh = sample_mesh();
   const auto bytes = encode_surface(SurfaceInfo{5, 1.0 / 3.0, 12.75f}, mesh);
-  std::ofstream(dir / "surface.bin", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  write_bytes(dir / "data.bin", bytes);
   nlohmann::json pos = nlohmann::json::array(), idx = nlohmann::json::array();
   for (const auto& v : mesh.vertices) pos.push_back({v.x(), v.y(), v.z()});
   for (const auto& t : mesh.triangles) idx.push_back({t[0], t[1], t[2]});
   const nlohmann::json want = {{"frame", 5}, {"time", 1.0 / 3.0}, {"buildMs", 12.75}, {"positions", pos}, {"triangles", idx}};
   std::ofstream(dir / "expected.json") << want.dump();
-  const std::string cmd = "node '" + (test::source_dir() / "web" / "test" / "protocol_roundtrip.mjs").string() + "' --surface '" +
-                          (dir / "surface.bin").string() + "' '" + (dir / "expected.json").string() + "' 2>&1";
-  FILE* p = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
-  std::string out;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int rc = ::pclose(p);
+  const auto [rc, out] = node_roundtrip(dir, "--surface");
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("surface round trip ok"), std::string::npos) << out;
   fs::remove_all(dir);

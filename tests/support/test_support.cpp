@@ -2,7 +2,9 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <sys/wait.h>
 #include <fstream>
 #include <map>
 #include <unistd.h>
@@ -27,6 +29,19 @@ fs::path temp_dir(const std::string& tag) {
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
+}
+
+std::pair<int, std::string> shell(const std::string& cmd, bool echo) {
+  std::string out;
+  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!p) return {-1, ""};
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) {
+    out += buf;
+    if (echo) std::fputs(buf, stdout), std::fflush(stdout);
+  }
+  const int rc = ::pclose(p);
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, out};
 }
 
 io::TriangleMesh sphere_mesh(float radius, int subdivisions) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 
 namespace ff::test {
 
@@ -16,6 +17,10 @@ std::filesystem::path data_dir();
 std::filesystem::path binary();
 /// A fresh empty folder under the system temp dir, unique per call.
 std::filesystem::path temp_dir(const std::string& tag);
+
+/// Runs a shell command; its exit code (−1 when it did not exit normally) and its output, stdout and stderr.
+/// `echo`: also print the output as it comes (the progress of a long test shows with ctest -V).
+std::pair<int, std::string> shell(const std::string& cmd, bool echo = false);
 
 /// Closed unit-radius sphere (icosphere, `subdivisions` ≥ 0), outward CCW triangles.
 io::TriangleMesh sphere_mesh(float radius, int subdivisions);
