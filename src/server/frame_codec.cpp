@@ -1,6 +1,9 @@
 #include "server/frame_codec.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -20,6 +23,27 @@ T get(std::span<const std::uint8_t> b, std::size_t at) {
   std::memcpy(&v, b.data() + at, sizeof(T));
   return v;
 }
+
+// Both messages start alike: magic, version, header bytes.
+void put_preamble(std::vector<std::uint8_t>& b, std::uint32_t magic, std::uint16_t version, std::size_t header) {
+  put(b, 0, magic);
+  put(b, 4, version);
+  put(b, 6, static_cast<std::uint16_t>(header));
+}
+
+// Checks the preamble of a `what` message; its header bytes (where the body starts).
+Result<std::size_t> read_preamble(std::span<const std::uint8_t> b, std::uint32_t magic, std::uint16_t version,
+                                  std::size_t min_header, const char* what) {
+  if (b.size() < min_header) return input_error(fmt::format("{}: shorter than its header", what));
+  if (get<std::uint32_t>(b, 0) != magic) return input_error(fmt::format("{}: wrong magic", what));
+  if (get<std::uint16_t>(b, 4) != version) return input_error(fmt::format("{}: unknown version", what));
+  const std::size_t header = get<std::uint16_t>(b, 6);
+  if (header < min_header) return input_error(fmt::format("{}: header shorter than its fields", what));
+  return header;
+}
+
+// Vertices (three floats) and triangles (three u32) go as they lie in memory.
+static_assert(sizeof(Vec3f) == 12 && sizeof(std::array<Index, 3>) == 12 && sizeof(Index) == 4);
 }  // namespace
 
 Vec3f quantisation_step(const Vec3f& lo, const Vec3f& hi) { return 0.5f * (hi - lo) / 65535.0f; }
@@ -33,9 +57,7 @@ std::vector<std::uint8_t> encode_frame(const FrameInfo& info, std::span<const Ve
   if (!(lo.x() <= hi.x())) lo = hi = Vec3f::Zero();  // no finite position
   const std::size_t body = kFrameHeaderBytes + 7 * n;
   std::vector<std::uint8_t> b((body + 3) / 4 * 4, 0);
-  put(b, 0, kFrameMagic);
-  put(b, 4, kFrameVersion);
-  put(b, 6, static_cast<std::uint16_t>(kFrameHeaderBytes));
+  put_preamble(b, kFrameMagic, kFrameVersion, kFrameHeaderBytes);
   put(b, 8, info.frame);
   put(b, 12, static_cast<std::uint32_t>(n));
   put(b, 16, info.time);
@@ -60,12 +82,9 @@ std::vector<std::uint8_t> encode_frame(const FrameInfo& info, std::span<const Ve
 }
 
 Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> b) {
-  if (b.size() < kFrameHeaderBytes) return input_error("frame: shorter than its header");
-  if (get<std::uint32_t>(b, 0) != kFrameMagic) return input_error("frame: wrong magic");
-  if (get<std::uint16_t>(b, 4) != kFrameVersion) return input_error("frame: unknown version");
-  const std::size_t header = get<std::uint16_t>(b, 6);
+  FF_TRY(const std::size_t header, read_preamble(b, kFrameMagic, kFrameVersion, kFrameHeaderBytes, "frame"));
   const std::size_t n = get<std::uint32_t>(b, 12);
-  if (header < kFrameHeaderBytes || b.size() < header + 7 * n) return input_error("frame: shorter than its particles");
+  if (b.size() < header + 7 * n) return input_error("frame: shorter than its particles");
   DecodedFrame f;
   f.info.frame = get<std::uint32_t>(b, 8);
   f.info.time = get<double>(b, 16);
@@ -86,44 +105,32 @@ Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> b) {
 std::vector<std::uint8_t> encode_surface(const SurfaceInfo& info, const io::TriangleMesh& mesh) {
   const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
   std::vector<std::uint8_t> b(kSurfaceHeaderBytes + 12 * nv + 12 * nt, 0);
-  put(b, 0, kSurfaceMagic);
-  put(b, 4, kSurfaceVersion);
-  put(b, 6, static_cast<std::uint16_t>(kSurfaceHeaderBytes));
+  put_preamble(b, kSurfaceMagic, kSurfaceVersion, kSurfaceHeaderBytes);
   put(b, 8, info.frame);
   put(b, 12, static_cast<std::uint32_t>(nv));
   put(b, 16, info.time);
   put(b, 24, static_cast<std::uint32_t>(nt));
   put(b, 28, info.build_ms);
-  for (std::size_t i = 0; i < nv; ++i)
-    for (int a = 0; a < 3; ++a) put(b, kSurfaceHeaderBytes + 12 * i + 4 * std::size_t(a), mesh.vertices[i][a]);
-  const std::size_t tri = kSurfaceHeaderBytes + 12 * nv;
-  for (std::size_t i = 0; i < nt; ++i)
-    for (int a = 0; a < 3; ++a) put(b, tri + 12 * i + 4 * std::size_t(a), static_cast<std::uint32_t>(mesh.triangles[i][a]));
+  if (nv) std::memcpy(b.data() + kSurfaceHeaderBytes, mesh.vertices.data(), 12 * nv);
+  if (nt) std::memcpy(b.data() + kSurfaceHeaderBytes + 12 * nv, mesh.triangles.data(), 12 * nt);
   return b;
 }
 
 Result<DecodedSurface> decode_surface(std::span<const std::uint8_t> b) {
-  if (b.size() < kSurfaceHeaderBytes) return input_error("surface: shorter than its header");
-  if (get<std::uint32_t>(b, 0) != kSurfaceMagic) return input_error("surface: wrong magic");
-  if (get<std::uint16_t>(b, 4) != kSurfaceVersion) return input_error("surface: unknown version");
-  const std::size_t header = get<std::uint16_t>(b, 6);
+  FF_TRY(const std::size_t header, read_preamble(b, kSurfaceMagic, kSurfaceVersion, kSurfaceHeaderBytes, "surface"));
   const std::size_t nv = get<std::uint32_t>(b, 12), nt = get<std::uint32_t>(b, 24);
-  if (header < kSurfaceHeaderBytes || b.size() < header + 12 * nv + 12 * nt) return input_error("surface: shorter than its mesh");
+  if (b.size() < header + 12 * nv + 12 * nt) return input_error("surface: shorter than its mesh");
   DecodedSurface s;
   s.info.frame = get<std::uint32_t>(b, 8);
   s.info.time = get<double>(b, 16);
   s.info.build_ms = get<float>(b, 28);
   s.mesh.vertices.resize(nv);
-  for (std::size_t i = 0; i < nv; ++i)
-    for (int a = 0; a < 3; ++a) s.mesh.vertices[i][a] = get<float>(b, header + 12 * i + 4 * std::size_t(a));
   s.mesh.triangles.resize(nt);
-  const std::size_t tri = header + 12 * nv;
-  for (std::size_t i = 0; i < nt; ++i)
-    for (int a = 0; a < 3; ++a) {
-      const std::uint32_t v = get<std::uint32_t>(b, tri + 12 * i + 4 * std::size_t(a));
+  if (nv) std::memcpy(static_cast<void*>(s.mesh.vertices.data()), b.data() + header, 12 * nv);  // float triples
+  if (nt) std::memcpy(s.mesh.triangles.data(), b.data() + header + 12 * nv, 12 * nt);
+  for (const auto& t : s.mesh.triangles)
+    for (const Index v : t)
       if (v >= nv) return input_error("surface: a triangle names a vertex out of range");
-      s.mesh.triangles[i][a] = static_cast<Index>(v);
-    }
   return s;
 }
 
