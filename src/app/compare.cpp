@@ -3,6 +3,7 @@
 #include "control/registry.h"
 #include "core/parallel.h"
 #include "io/atomic_file.h"
+#include "io/csv_table.h"
 #include "io/scene.h"
 #include "metrics/summary.h"
 
@@ -74,24 +75,12 @@ struct ErrorSeries {
   std::vector<double> time, error;
 };
 
-std::vector<std::string> split(const std::string& line, char sep) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  for (std::string f; std::getline(ss, f, sep);) out.push_back(f);
-  return out;
-}
-
 ErrorSeries read_error_series(const fs::path& csv) {
   ErrorSeries s;
-  std::istringstream in(read_text(csv));
-  std::string line;
-  if (!std::getline(in, line)) return s;
-  const auto head = split(line, ',');
-  const auto col = [&](std::string_view name) { return std::size_t(std::find(head.begin(), head.end(), name) - head.begin()); };
-  const std::size_t c_time = col("time_s"), c_err = col("error_rate_pct");
-  if (c_time >= head.size() || c_err >= head.size()) return s;
-  while (std::getline(in, line)) {
-    const auto f = split(line, ',');
+  const io::CsvTable t = io::read_csv(csv);
+  const std::size_t c_time = t.column("time_s"), c_err = t.column("error_rate_pct");
+  if (c_time >= t.head.size() || c_err >= t.head.size()) return s;
+  for (const auto& f : t.rows) {
     if (f.size() <= std::max(c_time, c_err)) continue;
     s.time.push_back(std::strtod(f[c_time].c_str(), nullptr));
     s.error.push_back(std::strtod(f[c_err].c_str(), nullptr));
@@ -274,7 +263,7 @@ std::string cpu_model() {
 
 Result<std::vector<std::string>> parse_controller_list(std::string_view list) {
   std::vector<std::string> names;
-  for (const auto& item : split(std::string(list), ',')) {
+  for (const auto& item : io::split_fields(std::string(list), ',')) {
     const std::string name = one_line(item);
     if (name.empty()) return param_error(fmt::format("--controllers \"{}\": an empty name", list));
     if (!control::find_controller(name))

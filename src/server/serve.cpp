@@ -4,6 +4,7 @@
 #include "app/mesh_export.h"
 #include "control/registry.h"
 #include "core/timer.h"
+#include "io/csv_table.h"
 #include "io/scene.h"
 #include "io/write_ply.h"
 #include "server/frame_codec.h"
@@ -24,7 +25,6 @@
 #include <deque>
 #include <fstream>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 namespace ff::server {
@@ -277,24 +277,14 @@ Result<Recording> open_recording(const fs::path& out) {
   }
   r.error_rate.assign(r.frames.size(), NAN);
   r.step_seconds.assign(r.frames.size(), 0.0);
-  std::ifstream csv(out / "metrics.csv");
-  std::string line;
-  if (csv && std::getline(csv, line)) {
-    std::vector<std::string> head;
-    std::stringstream hs(line);
-    for (std::string c; std::getline(hs, c, ',');) head.push_back(c);
-    const auto col = [&](const char* name) { return std::size_t(std::find(head.begin(), head.end(), name) - head.begin()); };
-    const std::size_t c_frame = col("frame"), c_err = col("error_rate_pct"), c_step = col("step_time_s");
-    while (std::getline(csv, line)) {
-      std::vector<std::string> v;
-      std::stringstream ls(line);
-      for (std::string c; std::getline(ls, c, ',');) v.push_back(c);
-      if (c_frame >= v.size()) continue;
-      const long f = std::strtol(v[c_frame].c_str(), nullptr, 10);
-      if (f < 0 || f >= long(r.frames.size())) continue;
-      if (c_err < v.size()) r.error_rate[std::size_t(f)] = std::strtod(v[c_err].c_str(), nullptr);
-      if (c_step < v.size()) r.step_seconds[std::size_t(f)] = std::strtod(v[c_step].c_str(), nullptr);
-    }
+  const io::CsvTable csv = io::read_csv(out / "metrics.csv");
+  const std::size_t c_frame = csv.column("frame"), c_err = csv.column("error_rate_pct"), c_step = csv.column("step_time_s");
+  for (const auto& v : csv.rows) {
+    if (c_frame >= v.size()) continue;
+    const long f = std::strtol(v[c_frame].c_str(), nullptr, 10);
+    if (f < 0 || f >= long(r.frames.size())) continue;
+    if (c_err < v.size()) r.error_rate[std::size_t(f)] = std::strtod(v[c_err].c_str(), nullptr);
+    if (c_step < v.size()) r.step_seconds[std::size_t(f)] = std::strtod(v[c_step].c_str(), nullptr);
   }
   return r;
 }
