@@ -4,7 +4,6 @@
 #include "control/steering.h"
 #include "core/timer.h"
 #include "io/atomic_file.h"
-#include "io/load_mesh.h"
 #include "sim/emitter.h"
 
 #include <fmt/format.h>
@@ -15,15 +14,6 @@
 
 namespace ff::app {
 namespace fs = std::filesystem;
-
-namespace {
-// The rotation of a LivePose, made the way keyframes make theirs (one keyframe, read at its time).
-control::Pose to_pose(const LivePose& p) {
-  control::TargetMotion m;
-  m.keys = {control::Keyframe{0.0, p.translate, p.rotate_deg, p.scale}};
-  return m.at(0.0);
-}
-}  // namespace
 
 Result<std::unique_ptr<LiveScene>> LiveScene::create(const io::Scene& scene_in, const LiveOptions& options,
                                                      core::Progress& progress) {
@@ -132,7 +122,7 @@ Result<LivePose> LiveScene::set_pose(std::size_t t, const LivePose& in) {
   // The target's centre stays in the domain: beyond it no fluid can follow, and the sample grids cover the domain.
   const Vec3f lo = scene_.domain.min - targets_[t].pivot, hi = scene_.domain.max - targets_[t].pivot;
   p.translate = p.translate.cwiseMax(lo).cwiseMin(hi);
-  const control::Pose pose = to_pose(p);
+  const control::Pose pose = control::make_pose(p.translate, p.rotate_deg, p.scale);
   motions_[t].live = pose;
   if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
   targets_[t].pose = p;
@@ -143,26 +133,18 @@ Status LiveScene::set_mesh(std::size_t t, std::size_t mesh, core::Progress& prog
   if (t >= targets_.size()) return param_error(fmt::format("target {} does not exist ({} targets)", t, targets_.size()));
   if (mesh >= meshes_.size()) return param_error(fmt::format("mesh {} does not exist ({} meshes)", mesh, meshes_.size()));
   if (targets_[t].mesh == mesh) return {};
-  io::TargetSpec spec = scene_.targets[t];
-  spec.mesh = meshes_[mesh];
-  sampling::SamplingParams sp = scene_.sampling;
-  if (!(sp.spacing > 0.0f)) sp.spacing = scene_.solver.spacing();
-  sp.rest_density = scene_.solver.rest_density;
-  FF_TRY(TargetControls tc, prepare_target(spec, sp, static_cast<std::uint8_t>(t), options_.cache_dir, progress));
-  io::MeshLoadStats st;
-  FF_TRY(auto m, io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st));
-  FF_TRY(auto shape, metrics::TargetShape::build(m, tc.set.position, tc.set.spacing));
+  FF_TRY(MeshPhase phase, prepare_mesh(scene_, t, meshes_[mesh], options_.cache_dir, progress));
   // The swapped-in mesh replaces the target for good (its scheduled swaps are dropped); the pivot stays, so the
   // new mesh takes the target's place and pose.
-  controls_[t].set = std::move(tc.set);
+  controls_[t].set = std::move(phase.set);
   controls_[t].swaps.clear();
   controls_[t].start = 0.0;
   shapes_[t].from = {-INFINITY};
   shapes_[t].shape.clear();
-  shapes_[t].shape.push_back(std::move(shape));
+  shapes_[t].shape.push_back(std::move(phase.shape));
   targets_[t].mesh = mesh;
   FF_CHECK(rebuild_controller());
-  spdlog::info("target {} is now {} ({} control particles)", t, spec.mesh.filename().string(), controls_[t].set.size());
+  spdlog::info("target {} is now {} ({} control particles)", t, meshes_[mesh].filename().string(), controls_[t].set.size());
   return {};
 }
 

@@ -12,14 +12,34 @@ namespace ff::app {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+sampling::SamplingParams target_sampling(const io::Scene& scene) {
+  sampling::SamplingParams sp = scene.sampling;
+  if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
+  sp.rest_density = scene.solver.rest_density;
+  return sp;
+}
+
+Result<MeshPhase> prepare_mesh(const io::Scene& scene, std::size_t t, const fs::path& mesh_path, const fs::path& cache_dir,
+                               core::Progress& progress, const std::string& where) {
+  io::TargetSpec spec = scene.targets[t];
+  spec.mesh = mesh_path;
+  FF_TRY(TargetControls tc, prepare_target(spec, target_sampling(scene), static_cast<std::uint8_t>(t), cache_dir, progress));
+  const auto fail = [&](const Error& e) {
+    return Error{e.kind, where.empty() ? e.message : fmt::format("{}: {}", where, e.message)};
+  };
+  io::MeshLoadStats st;
+  auto mesh = io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st);
+  if (!mesh) return fail(mesh.error());
+  auto shape = metrics::TargetShape::build(*mesh, tc.set.position, tc.set.spacing);
+  if (!shape) return fail(shape.error());
+  return MeshPhase{std::move(tc.set), std::move(*shape)};
+}
+
 Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const fs::path& cache_dir, const fs::path& report_dir,
                                         core::Progress& progress) {
   PreparedTargets out;
-  // The sampling spacing defaults to the fluid spacing d (METHOD §0: d_c = d).
-  sampling::SamplingParams sp = scene.sampling;
-  if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
-  sp.rest_density = scene.solver.rest_density;
+  const sampling::SamplingParams sp = target_sampling(scene);
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), cache_dir, progress));
     for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
@@ -40,19 +60,13 @@ Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vecto
     // Mesh swaps (morph): each swapped-in mesh is sampled (and cached) like a target of its own.
     std::vector<std::pair<double, sampling::ControlSet>> swaps;
     for (std::size_t k = 0; k < scene.targets[i].swaps.size(); ++k) {
-      io::TargetSpec spec = scene.targets[i];
-      spec.mesh = scene.targets[i].swaps[k].mesh;
-      FF_TRY(TargetControls sw, prepare_target(spec, sp, static_cast<std::uint8_t>(i), cache_dir, progress));
-      io::MeshLoadStats st;
-      auto mesh = io::load_mesh(spec.mesh, io::LoadOptions{spec.transform}, &st);
-      if (!mesh) return Error{mesh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, mesh.error().message)};
-      auto sh = metrics::TargetShape::build(*mesh, sw.set.position, sw.set.spacing);
-      if (!sh) return Error{sh.error().kind, fmt::format("targets[{}].morph[{}]: {}", i, k, sh.error().message)};
-      spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, spec.mesh.filename().string(),
-                   scene.targets[i].swaps[k].time, sw.set.size());
-      ts.from.push_back(scene.targets[i].swaps[k].time);
-      ts.shape.push_back(std::move(*sh));
-      swaps.emplace_back(scene.targets[i].swaps[k].time, std::move(sw.set));
+      const io::TargetSpec::Swap& swap = scene.targets[i].swaps[k];
+      FF_TRY(MeshPhase sw, prepare_mesh(scene, i, swap.mesh, cache_dir, progress, fmt::format("targets[{}].morph[{}]", i, k)));
+      spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, swap.mesh.filename().string(), swap.time,
+                   sw.set.size());
+      ts.from.push_back(swap.time);
+      ts.shape.push_back(std::move(sw.shape));
+      swaps.emplace_back(swap.time, std::move(sw.set));
     }
     out.shapes.push_back(std::move(ts));
     control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace ff::app {
@@ -30,6 +31,21 @@ struct TargetShapes {
     return shape[k];
   }
 };
+
+/// The sampling parameters of a scene's targets: the scene's, with the spacing defaulting to the fluid spacing d
+/// (METHOD §0: d_c = d) and the controls calibrated to the fluid's rest density.
+sampling::SamplingParams target_sampling(const io::Scene& scene);
+
+/// Target `t` of `scene` as another mesh (a morph's, or the live viewer's swap): its control particles, sampled
+/// with the target's transform (or from `cache_dir`), and its metric shape. Errors of loading the mesh or building
+/// the shape are prefixed with `where` (when not empty).
+struct MeshPhase {
+  sampling::ControlSet set;
+  metrics::TargetShape shape;
+};
+Result<MeshPhase> prepare_mesh(const io::Scene& scene, std::size_t t, const std::filesystem::path& mesh,
+                               const std::filesystem::path& cache_dir, core::Progress& progress,
+                               const std::string& where = "");
 
 /// Every target of a completed scene, ready for make_controller and the metrics.
 struct PreparedTargets {

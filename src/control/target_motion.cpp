@@ -26,6 +26,14 @@ Eigen::Affine3f Pose::rest_from_world() const {
   return a;
 }
 
+Pose make_pose(const Vec3f& translate, const Vec3f& rotate_deg, float scale) {
+  Pose p;
+  p.translate = translate;
+  p.rotation = rotation_of(rotate_deg);
+  p.scale = scale;
+  return p;
+}
+
 Pose TargetMotion::at(double time) const {
   Pose p;
   p.pivot = pivot;
@@ -47,9 +55,9 @@ Pose TargetMotion::at(double time) const {
     u = static_cast<float>((time - a->time) / (b->time - a->time));
     if (smooth) u = u * u * (3.0f - 2.0f * u);
   }
-  p.translate = a->translate + u * (b->translate - a->translate);
-  p.rotation = rotation_of(a->rotate_deg + u * (b->rotate_deg - a->rotate_deg));
-  p.scale = a->scale + u * (b->scale - a->scale);
+  p = make_pose(a->translate + u * (b->translate - a->translate), a->rotate_deg + u * (b->rotate_deg - a->rotate_deg),
+                a->scale + u * (b->scale - a->scale));
+  p.pivot = pivot;
   return p;
 }
 

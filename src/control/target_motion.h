@@ -32,6 +32,9 @@ struct Pose {
   Eigen::Affine3f rest_from_world() const;
 };
 
+/// The pose of one keyframe's values (rotation R = R_z R_y R_x from degrees), about a pivot set by the caller.
+Pose make_pose(const Vec3f& translate, const Vec3f& rotate_deg, float scale);
+
 struct TargetMotion {
   std::vector<Keyframe> keys;
   bool smooth = false;           ///< smoothstep easing between keyframes (else linear)
