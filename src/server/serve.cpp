@@ -170,10 +170,28 @@ void publish_surface(Shared& sh, const app::LiveScene& scene) {
   sh.server->publish_surface(std::make_shared<const std::vector<std::uint8_t>>(encode_surface(info, *mesh)));
 }
 
-void publish(Shared& sh, const FrameInfo& info, const sim::ParticleSet& p) {
-  auto bytes = std::make_shared<const std::vector<std::uint8_t>>(encode_frame(info, p.position, p.target));
-  sh.server->publish_frame(std::move(bytes));
+void publish(Shared& sh, const FrameInfo& info, std::span<const Vec3f> x, std::span<const std::uint8_t> targets) {
+  sh.server->publish_frame(std::make_shared<const std::vector<std::uint8_t>>(encode_frame(info, x, targets)));
 }
+
+// Frames at most at `fps` (real time): after each frame, the wait until the next is due. A frame that took longer
+// than its share moves the schedule on rather than being made up with a burst.
+class Pacer {
+ public:
+  explicit Pacer(double fps) : dt_(1.0 / fps) {}
+  /// Seconds to wait after the frame just published (≤ 0: none).
+  double wait() {
+    next_due_ = std::max(next_due_ + dt_, clock_.seconds() - dt_);
+    return next_due_ - clock_.seconds();
+  }
+  /// Paused: the schedule restarts from now.
+  void hold() { next_due_ = clock_.seconds(); }
+  double elapsed() const { return clock_.seconds(); }
+
+ private:
+  double dt_, next_due_ = 0.0;
+  core::Stopwatch clock_;
+};
 
 void error_text(Shared& sh, const std::string& what) {
   spdlog::warn("serve: {}", what);
@@ -183,13 +201,14 @@ void error_text(Shared& sh, const std::string& what) {
 // The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
 void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
   RateMeter rate;
-  const double frame_dt = 1.0 / scene.fps();
-  core::Stopwatch clock;
-  double next_due = 0.0;
+  Pacer pace(scene.fps());
   std::uint64_t frames = 0;
   double step_total = 0.0, last_surface = -kSurfaceEvery;
   int surface_frame = -1;
-  publish(sh, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0}, scene.particles());
+  const auto publish_particles = [&](const FrameInfo& info) {
+    publish(sh, info, scene.particles().position, scene.particles().target);
+  };
+  publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
   while (!sh.stop) {
     for (Command& c : sh.commands.take()) {
       Status st;
@@ -199,7 +218,7 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
         case Command::Kind::Restart:
           st = scene.restart();
           rate.reset();
-          if (st.ok()) publish(sh, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0}, scene.particles());
+          if (st.ok()) publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
           break;
         case Command::Kind::Controller: st = scene.set_controller(c.name); break;
         case Command::Kind::Pose: {
@@ -215,22 +234,19 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
           break;
       }
       if (!st.ok()) error_text(sh, st.error().message);
-      if (c.kind != Command::Kind::Pose) {
-        sh.set_hello(live_hello(scene, sh.paused, sh.surface));
-        // Everyone learns the new state (controller, meshes, paused) the way a new client would.
-        sh.server->broadcast_text(sh.hello_text());
-      } else {
-        sh.set_hello(live_hello(scene, sh.paused, sh.surface));
-      }
+      sh.set_hello(live_hello(scene, sh.paused, sh.surface));
+      // Everyone learns the new state (controller, meshes, paused) the way a new client would; a pose has its own
+      // message, sent above.
+      if (c.kind != Command::Kind::Pose) sh.server->broadcast_text(sh.hello_text());
     }
-    if (sh.surface && scene.frame() != surface_frame && clock.seconds() - last_surface >= kSurfaceEvery) {
-      last_surface = clock.seconds();
+    if (sh.surface && scene.frame() != surface_frame && pace.elapsed() - last_surface >= kSurfaceEvery) {
+      last_surface = pace.elapsed();
       surface_frame = scene.frame();
       publish_surface(sh, scene);
     }
     if (sh.paused) {
       sh.commands.wait(0.05, sh.stop);
-      next_due = clock.seconds();
+      pace.hold();
       continue;
     }
     auto f = scene.step();
@@ -244,17 +260,15 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
     step_total += f->step_seconds;
     const FrameInfo info{static_cast<std::uint32_t>(f->frame), f->time, static_cast<float>(1e3 * f->step_seconds),
                          static_cast<float>(f->error_rate), rate.tick(), static_cast<std::uint32_t>(f->controlled)};
-    publish(sh, info, scene.particles());
+    publish_particles(info);
     if (opt.realtime) {
       // At most real time: the viewer shows the forming at its true speed when the simulation is faster.
-      next_due = std::max(next_due + frame_dt, clock.seconds() - frame_dt);
-      const double wait = next_due - clock.seconds();
-      if (wait > 0) sh.commands.wait(wait, sh.stop);
+      if (const double wait = pace.wait(); wait > 0) sh.commands.wait(wait, sh.stop);
     }
   }
   if (frames)
     spdlog::info("serve: {} frames simulated, {:.1f} ms per frame, {:.1f} frames per second of wall time", frames,
-                 1e3 * step_total / double(frames), double(frames) / clock.seconds());
+                 1e3 * step_total / double(frames), double(frames) / pace.elapsed());
 }
 
 // Playback of a finished run: its particle frames, read one at a time, in a loop at the run's frame rate.
@@ -297,11 +311,9 @@ json playback_hello(const Recording& r, bool paused) {
 }
 
 void playback_loop(const Recording& rec, Shared& sh) {
-  core::Stopwatch clock;
+  Pacer pace(rec.fps);
   RateMeter rate;
-  double next_due = 0.0;
   std::size_t k = 0;
-  sim::ParticleSet ps;
   while (!sh.stop) {
     for (Command& c : sh.commands.take()) {
       if (c.kind == Command::Kind::Play) sh.paused = false;
@@ -312,7 +324,7 @@ void playback_loop(const Recording& rec, Shared& sh) {
     }
     if (sh.paused) {
       sh.commands.wait(0.05, sh.stop);
-      next_due = clock.seconds();
+      pace.hold();
       continue;
     }
     auto frame = io::read_particles_ply(rec.frames[k]);
@@ -323,12 +335,9 @@ void playback_loop(const Recording& rec, Shared& sh) {
     }
     const FrameInfo info{static_cast<std::uint32_t>(k), double(k) / rec.fps, static_cast<float>(1e3 * rec.step_seconds[k]),
                          static_cast<float>(rec.error_rate[k]), rate.tick(), 0};
-    sh.server->publish_frame(std::make_shared<const std::vector<std::uint8_t>>(
-        encode_frame(info, frame->positions, frame->targets)));
+    publish(sh, info, frame->positions, frame->targets);
     k = (k + 1) % rec.frames.size();
-    next_due = std::max(next_due + 1.0 / rec.fps, clock.seconds() - 1.0 / rec.fps);
-    const double wait = next_due - clock.seconds();
-    if (wait > 0) sh.commands.wait(wait, sh.stop);
+    if (const double wait = pace.wait(); wait > 0) sh.commands.wait(wait, sh.stop);
   }
 }
 
