@@ -210,11 +210,17 @@ function onHello(h) {
   redraw();
 }
 
+// What the scene shows, from a hello: the targets' boxes, or the domain when there are none (empty if neither).
+function contentBox(h) {
+  const box = new THREE.Box3();
+  for (const t of h?.targets ?? []) box.expandByPoint(new THREE.Vector3(...t.box.min)).expandByPoint(new THREE.Vector3(...t.box.max));
+  if (box.isEmpty() && h?.domain) box.set(new THREE.Vector3(...h.domain.min), new THREE.Vector3(...h.domain.max));
+  return box;
+}
+
 // Looks at the targets (or the domain) from a distance that fits them.
 function frameCamera(h) {
-  const box = new THREE.Box3();
-  for (const t of h.targets ?? []) box.expandByPoint(new THREE.Vector3(...t.box.min)).expandByPoint(new THREE.Vector3(...t.box.max));
-  if (box.isEmpty() && h.domain) box.set(new THREE.Vector3(...h.domain.min), new THREE.Vector3(...h.domain.max));
+  const box = contentBox(h);
   if (box.isEmpty()) return;
   framed = true;
   const c = box.getCenter(new THREE.Vector3());
@@ -327,9 +333,7 @@ for (let i = 0; i < 2; ++i) {
 // In an immersive session the viewer stands at the origin of its floor: the content is put in front of them, on
 // the floor at full size in VR, and at table-top size (about half a metre across) 1.2 m ahead in AR.
 function placeForXr(ar) {
-  const box = new THREE.Box3();
-  for (const t of state.hello?.targets ?? []) box.expandByPoint(new THREE.Vector3(...t.box.min)).expandByPoint(new THREE.Vector3(...t.box.max));
-  if (box.isEmpty() && state.hello?.domain) box.set(new THREE.Vector3(...state.hello.domain.min), new THREE.Vector3(...state.hello.domain.max));
+  const box = contentBox(state.hello);
   if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, 0, -0.5), new THREE.Vector3(0.5, 1, 0.5));
   const c = box.getCenter(new THREE.Vector3()), r = Math.max(1e-3, 0.5 * box.getSize(new THREE.Vector3()).length());
   const s = ar ? Math.min(1, 0.25 / r) : 1;

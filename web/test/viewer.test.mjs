@@ -135,6 +135,14 @@ const waitFor = async (page, fn, arg, timeoutMs, what) => {
   }
 };
 
+// After an edit at simulated time t: waits until E < 4 % (from 0.1 s after the edit on) or 3 simulated seconds have
+// passed; {ok: the wait did not time out, f: the newest frame}. The caller checks f against the issue's 4 %.
+const reforms = async (page, t, what) => {
+  const ok = await waitFor(page, (t0) => window.__ff.frame.time > t0 + 0.1 && window.__ff.frame.errorRate < 4 ||
+                           window.__ff.frame.time > t0 + 3, t, 180_000, what);
+  return { ok, f: await page.evaluate(() => window.__ff.frame) };
+};
+
 const summary = {};
 const browser = await chromium.launch({ executablePath: browserPath, headless: true, args: CHROMIUM_ARGS });
 try {
@@ -330,9 +338,7 @@ try {
         await sleep(300);
         const pose = await page.evaluate(() => window.__ff.poses[0]);
         check(true, `the server reports the rotation (${(pose.rotate[1] - rot0).toFixed(1)}° about y)`);
-        const ok = await waitFor(page, (t) => window.__ff.frame.time > t + 0.1 && window.__ff.frame.errorRate < 4 ||
-                                 window.__ff.frame.time > t + 3, pose.time, 180_000, 'the shape re-forms after the rotation');
-        const f = await page.evaluate(() => window.__ff.frame);
+        const { ok, f } = await reforms(page, pose.time, 'the shape re-forms after the rotation');
         summary.rotate = { degrees: pose.rotate[1] - rot0, error_pct: f.errorRate, after_s: f.time - pose.time };
         check(ok && f.errorRate < 4, `E against the rotated target under 4 % within 3 simulated seconds ` +
                                      `(${f.errorRate.toFixed(2)} % at ${(f.time - pose.time).toFixed(2)} s)`);
@@ -349,9 +355,7 @@ try {
       if (await waitFor(page, () => window.__ff.hello.targets[0].mesh === 1, null, 120_000, 'the server swaps the mesh')) {
         check(true, `the server swapped target 0 to ${meshes[1]}`);
         const t1 = await page.evaluate(() => window.__ff.frame.time);
-        const ok = await waitFor(page, (t) => window.__ff.frame.time > t + 0.1 && window.__ff.frame.errorRate < 4 ||
-                                 window.__ff.frame.time > t + 3, t1, 180_000, 'the fluid forms the new mesh');
-        const f = await page.evaluate(() => window.__ff.frame);
+        const { ok, f } = await reforms(page, t1, 'the fluid forms the new mesh');
         const hist = await page.evaluate(() => window.__ff.history);
         const peak = Math.max(...hist.filter((h) => h.time > tSwap).map((h) => h.error));
         summary.swap = { error_peak_pct: peak, error_pct: f.errorRate, after_s: f.time - t1 };
