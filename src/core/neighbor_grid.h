@@ -54,6 +54,8 @@ class NeighborRange {
 
   std::size_t size() const { return n_; }
   bool empty() const { return n_ == 0; }
+  /// The plain 32-bit entries of a wide list (nullptr for a compact one): pair loops read them in place.
+  const Index* wide() const { return wide_; }
   Index operator[](std::size_t k) const {
     if (wide_) return wide_[k];
     const std::uint32_t c = code_[k];
