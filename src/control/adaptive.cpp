@@ -28,16 +28,19 @@ inline __m128 dist2(const Vec3f* x, const Index* j, __m128 px, __m128 py, __m128
   return _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
 }
 
-// Four bonds of a particle from k (of its range ending at e): the missing ones repeat the first (masked by the
-// caller with first_lanes(left)).
-struct Bonds4 {
-  Index i[4];
-  Index left;
+// Four packed samples, transposed: one register each for x, y, z and the per-pass value w.
+struct P4 {
+  __m128 x, y, z, w;
 };
-inline Bonds4 bonds4(const Index* idx, Index k, Index e) {
-  const Index left = e - k, i0 = idx[k];
-  return {{i0, left > 1 ? idx[k + 1] : i0, left > 2 ? idx[k + 2] : i0, left > 3 ? idx[k + 3] : i0}, left};
+inline P4 gather_packed(const PackedSample* s, const Index* k) {
+  __m128 a = _mm_load_ps(&s[k[0]].x), b = _mm_load_ps(&s[k[1]].x), c = _mm_load_ps(&s[k[2]].x),
+         d = _mm_load_ps(&s[k[3]].x);
+  _MM_TRANSPOSE4_PS(a, b, c, d);
+  return {a, b, c, d};
 }
+
+// Where the padding of the bond lists points: far from any fluid (r² ≈ 3e36, still finite), with w = 0.
+constexpr float kSentinelCoord = 1e18f;
 
 }  // namespace
 
@@ -160,6 +163,8 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   nearest_.resize(n);
   fill_.resize(m);
   hstar2_.resize(m);
+  xcw_.resize(m + 1);
+  xcw_[m] = {kSentinelCoord, kSentinelCoord, kSentinelCoord, 0.0f};
   lambda_.assign(m, 0.0f);
 
   // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
@@ -194,6 +199,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     }
     const float f = mp * rho / rho_c_[i];
     fill_[i] = f;
+    xcw_[i] = {xc_[i].x(), xc_[i].y(), xc_[i].z(), f};
     float scale = 1.0f;
     if (params_.bond_breaking) {
       scale = params_.bond_radius == BondRadius::Paper ? 1.0f / (1.0f + f) : std::min(1.0f, 2.0f / (1.0f + f));
@@ -249,6 +255,7 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     bonds_of(t, [&](Index, Index j) { ++count[j]; });
   }
   bond_off_.resize(n + 1);
+  bond_end_.resize(n);
   Index run = 0;
   for (std::size_t j = 0; j < n; ++j) {
     bond_off_[j] = run;
@@ -258,6 +265,8 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
       c = run;
       run += k;
     }
+    bond_end_[j] = run;
+    run = bond_off_[j] + ((run - bond_off_[j] + 3) & ~Index(3));  // room for the padding
   }
   bond_off_[n] = run;
   bond_idx_.resize(run);
@@ -267,9 +276,11 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     bonds_of(omp_get_thread_num(), [&](Index i, Index j) { bond_idx_[cursor[j]++] = i; });
   }
 
-  // The nearest bonded sample of each particle (ties: the lower sample index), four bonds at a time.
+  // The padding, then the nearest bonded sample of each particle (ties: the lower sample index), four bonds at a
+  // time.
   using namespace core::simd;
   Index* bound = p.bound_control.data();
+  const auto sentinel = static_cast<Index>(m);
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     const Index b = bond_off_[j], e = bond_off_[j + 1];
@@ -277,15 +288,16 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
       nearest_[j] = bound[j] = kInvalidIndex;
       return;
     }
+    for (Index k = bond_end_[j]; k < e; ++k) bond_idx_[k] = sentinel;
     const Vec3f xj = x[j];
     const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
     __m128 best = broadcast(INFINITY);
     __m128i best_i = _mm_set1_epi32(-1);
     for (Index k = b; k < e; k += 4) {
-      // Padding lanes repeat the first bond: a duplicate cannot change the minimum.
-      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
-      const Index i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
-      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
+      // The padding is far away: it never beats a real bond, and every list has one.
+      const Index* g = bond_idx_.data() + k;
+      const Index i0 = g[0], i1 = g[1], i2 = g[2], i3 = g[3];
+      const P4 xc = gather_packed(xcw_.data(), g);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
       // Bonds ascend, so a strict < keeps the lower index of a tie within a lane.
@@ -401,15 +413,13 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
     __m128 nx = zero, ny = zero, nz = zero, den = zero;
     // Four bonds at a time: Σ w f r and Σ w with w the Poly6 weight (its constant cancels in the ratio).
     for (Index k = b; k < e; k += 4) {
-      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
-      const Index left = g.left, i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
-      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
+      // w of the packed samples is their fill ratio here (written by begin_step); the padding is out of reach.
+      const P4 xc = gather_packed(xcw_.data(), bond_idx_.data() + k);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
       const __m128 q2 = _mm_sub_ps(h2, r2);
-      const __m128 w = select(_mm_and_ps(_mm_cmplt_ps(r2, h2), core::simd::first_lanes(left)),
-                              _mm_mul_ps(_mm_mul_ps(q2, q2), q2));
-      const __m128 fill = core::simd::gather(fill_.data(), i0, i1, i2, i3);
+      const __m128 w = select(_mm_cmplt_ps(r2, h2), _mm_mul_ps(_mm_mul_ps(q2, q2), q2));
+      const __m128 fill = xc.w;
       const __m128 f = _mm_div_ps(one, _mm_add_ps(one, _mm_mul_ps(fill, _mm_mul_ps(_mm_sqrt_ps(r2), inv_hc))));
       const __m128 wf = _mm_mul_ps(w, f);
       nx = _mm_add_ps(nx, _mm_mul_ps(wf, rx));
@@ -437,10 +447,13 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   const float mp = ctx_.particle_mass, eps = eps_c_;
   const bool multi = mass_c_.size() > 1;
   const __m128 h = broadcast(spiky_.h), h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
-  // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked).
+  const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
+  // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked),
+  // and the sample's coefficient φ̃ λ m_p/ρ_c kg of the Δx gather (0 when full) into its packed w.
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     lambda_[i] = 0.0f;
+    xcw_[i].w = 0.0f;
     const std::uint8_t t = tc_[i];
     if (!active(t, time_)) return;
     const Vec3f xi = xc_[i];
@@ -467,6 +480,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     if (c >= 0.0f) return;
     const float k = mp / rho_c_[i] * spiky_.kgrad;
     lambda_[i] = -c / (k * k * hsum(g2) + eps);
+    xcw_[i].w = phi_[i] * lambda_[i] * mp / rho_c_[i] * kg;
   });
   active_.clear();
   for (std::size_t i = 0; i < m; ++i)
@@ -477,7 +491,6 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
               max_dx2 = max_dx * max_dx;
   Vec3f* shift = p.shift.data();
   const bool kinematic = params_.kinematic;
-  const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
   auto apply = [&](std::size_t j, Vec3f dx) {
     dx *= alpha;
     const float d2 = dx.squaredNorm();
@@ -512,9 +525,8 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     });
     return;
   }
-  // Gather over the bonds, four at a time, with the per-sample factor φ̃ λ m_p/ρ_c kg precomputed (0 when full).
-  coef_.resize(m);
-  for (std::size_t i = 0; i < m; ++i) coef_[i] = lambda_[i] > 0.0f ? phi_[i] * lambda_[i] * mp / rho_c_[i] * kg : 0.0f;
+  // Gather over the bonds, four at a time, with the per-sample factor φ̃ λ m_p/ρ_c kg precomputed (0 when full;
+  // also 0 at the padding, which is out of reach too).
   const __m128 sh = broadcast(spiky_.h), sh2 = broadcast(spiky_.h2);
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
@@ -524,11 +536,9 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
     __m128 dx = zero, dy = zero, dz = zero;
     for (Index k = b; k < e; k += 4) {
-      const Bonds4 g = bonds4(bond_idx_.data(), k, e);
-      const Index left = g.left, i0 = g.i[0], i1 = g.i[1], i2 = g.i[2], i3 = g.i[3];
-      const __m128 c4 = _mm_and_ps(core::simd::gather(coef_.data(), i0, i1, i2, i3), core::simd::first_lanes(left));
+      const P4 xc = gather_packed(xcw_.data(), bond_idx_.data() + k);
+      const __m128 c4 = xc.w;
       if (_mm_movemask_ps(_mm_cmpgt_ps(c4, zero)) == 0) continue;
-      const V3 xc = core::simd::gather(xc_.data(), i0, i1, i2, i3);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
       const __m128 use = _mm_and_ps(_mm_cmplt_ps(r2, sh2), _mm_cmpgt_ps(r2, zero));

@@ -30,6 +30,11 @@
 
 namespace ff::control {
 
+/// A sample's position and one per-pass value, 16-byte aligned for one load (see AdaptiveController::xcw_).
+struct alignas(16) PackedSample {
+  float x, y, z, w;
+};
+
 class AdaptiveController final : public sim::Controller, public Steerable {
  public:
   /// Every target's set must have the same support H_c (they are sampled at one spacing).
@@ -81,7 +86,13 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
   std::vector<float> fill_, hstar2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; H_c*²; λ
-  std::vector<Index> bond_off_, bond_idx_;  // CSR: fluid j → bonded samples (ascending)
+  // CSR: fluid j → bonded samples (ascending), each list padded to a multiple of four with the sentinel sample
+  // m (far away, coefficient 0), so the bond loops load whole groups without tests; empty lists stay empty.
+  std::vector<Index> bond_off_, bond_idx_;
+  std::vector<Index> bond_end_;             // fluid j → end of its real bonds (before the padding)
+  // Per sample (and the sentinel at m): x, y, z and a per-pass value w (the fill ratio for the spring, then the
+  // control coefficient φ̃ λ m_p/ρ_c kg in each iteration), so a bond loop fetches a sample in one 16-byte load.
+  std::vector<PackedSample> xcw_;
   std::vector<Index> nearest_;              // fluid j → its nearest bonded sample (kInvalidIndex: none)
   std::vector<Index> cursor_;               // per thread × fluid: bond counts, then write cursors
   std::vector<Index> grp_base_;             // per sample: first group of four pairs in bond_mask_
@@ -89,7 +100,6 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
   std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)
   std::vector<std::uint8_t> touched_;
-  std::vector<float> coef_;              // φ̃ λ m_p/ρ_c kg per sample in the current iteration
   std::vector<NearestSeedField> seed_field_;  // per target
 };
 
