@@ -39,6 +39,16 @@ inline P4 gather_packed(const PackedSample* s, const Index* k) {
   return {a, b, c, d};
 }
 
+// The sample-major passes that feed the bond transpose (the fill pass counts each fluid particle's bonds per
+// thread, the placement writes them) split the samples the same way: T contiguous ranges in order, so a particle's
+// bonds come out in ascending sample order for any thread count.
+int bond_threads(std::size_t m) { return static_cast<std::int64_t>(m) < core::kMinParallel ? 1 : core::thread_count(); }
+void sample_range(std::size_t m, int T, int t, std::size_t& b, std::size_t& e) {
+  const std::size_t chunk = (m + static_cast<std::size_t>(T) - 1) / static_cast<std::size_t>(T);
+  b = std::min(m, chunk * static_cast<std::size_t>(t));
+  e = std::min(m, b + chunk);
+}
+
 // Where the padding of the bond lists points: far from any fluid (r² ≈ 3e36, still finite), with w = 0.
 constexpr float kSentinelCoord = 1e18f;
 
@@ -171,14 +181,13 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   using namespace core::simd;
   const float mp = ctx_.particle_mass, hc2 = hc_ * hc_;
   const bool multi = mass_c_.size() > 1;
-  const __m128 h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
+  const __m128 h2 = broadcast(poly6_.h2), hc2v = broadcast(hc2), zero = _mm_setzero_ps();
   // Groups of four pairs per sample: where each sample's bond masks start.
   grp_base_.resize(m + 1);
   grp_base_[0] = 0;
   for (std::size_t i = 0; i < m; ++i) grp_base_[i + 1] = grp_base_[i] + static_cast<Index>((cf_.of(i).size() + 3) / 4);
   bond_mask_.resize(grp_base_[m]);
-  parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
+  const auto fill_sample = [&](std::size_t i) {
     float rho = 0.0f;
     const std::uint8_t t = tc_[i];
     std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
@@ -188,12 +197,17 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       const Vec3f xi = xc_[i];
       const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
       __m128 sw = zero;
+      std::size_t g = 0;
+      // With the bond masks for H_c*,i = H_c (r ≤ H_c), right for every sample that is not over-full, which is
+      // nearly all of them once formed; the others are masked again below.
       core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
         const __m128 r2 = dist2(x, j, px, py, pz);
-        __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
-        if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
+        __m128 same = lanes;
+        if (multi) same = _mm_and_ps(same, same_target(tf, j, t));
+        const __m128 use = _mm_and_ps(same, _mm_cmplt_ps(r2, h2));
         const __m128 q2 = _mm_sub_ps(h2, r2);
         sw = _mm_add_ps(sw, select(use, _mm_mul_ps(_mm_mul_ps(q2, q2), q2)));
+        mask[g++] = static_cast<std::uint8_t>(_mm_movemask_ps(_mm_and_ps(same, _mm_cmple_ps(r2, hc2v))));
       });
       rho = poly6_.k * hsum(sw);
     }
@@ -207,7 +221,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     const float hs2 = hc2 * scale * scale;
     hstar2_[i] = hs2;
     // Bond masks, one bit per pair: r ≤ H_c*,i (and the same target). The pairs are still in L1 from the sum.
-    if (!active(t, time_)) return;
+    if (!active(t, time_) || hs2 == hc2) return;
     const Vec3f xi = xc_[i];
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z()), hs = broadcast(hs2);
     std::size_t g = 0;
@@ -217,43 +231,36 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       mask[g++] = static_cast<std::uint8_t>(_mm_movemask_ps(use));
     });
-  });
+  };
+  // Each thread fills its range of samples and counts their bonds per fluid particle (build_bonds places them).
+  const int T = bond_threads(m);
+  cursor_.assign(static_cast<std::size_t>(T) * n, 0);
+#pragma omp parallel num_threads(T)
+  {
+    const int t = omp_get_thread_num();
+    Index* count = cursor_.data() + static_cast<std::size_t>(t) * n;
+    std::size_t b, e;
+    sample_range(m, T, t, b, e);
+    for (std::size_t i = b; i < e; ++i) {
+      fill_sample(i);
+      const core::NeighborRange r = cf_.of(i);
+      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+      for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
+        for (unsigned bits = mask[g]; bits; bits &= bits - 1) ++count[r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]];
+    }
+  }
   build_bonds(p);
 }
 
 // Bonds B(j), CSR over the fluid, as the transpose of the sample → fluid pairs with |x_ci − x_j| ≤ H_c*,i: a
-// counting sort in which thread t counts and then places the bonds of its contiguous range of samples. Within a
+// counting sort in which thread t counts (in the fill pass) and then places the bonds of its contiguous range of
+// samples. Within a
 // particle, bonds are in ascending sample order for any thread count (thread ranges are ordered), so the result
 // is thread-count invariant. A fluid particle is controlled iff it has a bond (METHOD §a.5).
 void AdaptiveController::build_bonds(sim::ParticleSet& p) {
   const std::size_t n = p.size(), m = xc_.size();
   const Vec3f* x = p.position.data();
-  const int T = static_cast<std::int64_t>(m) < core::kMinParallel ? 1 : core::thread_count();
-  const auto range = [&](int t, std::size_t& b, std::size_t& e) {
-    const std::size_t chunk = (m + static_cast<std::size_t>(T) - 1) / static_cast<std::size_t>(T);
-    b = std::min(m, chunk * static_cast<std::size_t>(t));
-    e = std::min(m, b + chunk);
-  };
-  // Calls f(i, j) for every bond of the samples of thread t, from the masks of the fill pass.
-  const auto bonds_of = [&](int t, auto&& f) {
-    std::size_t b, e;
-    range(t, b, e);
-    for (std::size_t i = b; i < e; ++i) {
-      const core::NeighborRange r = cf_.of(i);
-      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
-      const std::size_t groups = grp_base_[i + 1] - grp_base_[i];
-      for (std::size_t g = 0; g < groups; ++g)
-        for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(static_cast<Index>(i), r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
-    }
-  };
-  const std::size_t tn = static_cast<std::size_t>(T) * n;
-  cursor_.assign(tn, 0);
-#pragma omp parallel num_threads(T)
-  {
-    const int t = omp_get_thread_num();
-    Index* count = cursor_.data() + static_cast<std::size_t>(t) * n;
-    bonds_of(t, [&](Index, Index j) { ++count[j]; });
-  }
+  const int T = bond_threads(m);  // the fill pass's partition: cursor_ holds its counts per thread
   bond_off_.resize(n + 1);
   bond_end_.resize(n);
   Index run = 0;
@@ -272,8 +279,17 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
   bond_idx_.resize(run);
 #pragma omp parallel num_threads(T)
   {
-    Index* cursor = cursor_.data() + static_cast<std::size_t>(omp_get_thread_num()) * n;
-    bonds_of(omp_get_thread_num(), [&](Index i, Index j) { bond_idx_[cursor[j]++] = i; });
+    const int t = omp_get_thread_num();
+    Index* cursor = cursor_.data() + static_cast<std::size_t>(t) * n;
+    std::size_t b, e;
+    sample_range(m, T, t, b, e);
+    for (std::size_t i = b; i < e; ++i) {
+      const core::NeighborRange r = cf_.of(i);
+      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+      for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
+        for (unsigned bits = mask[g]; bits; bits &= bits - 1)
+          bond_idx_[cursor[r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]]++] = static_cast<Index>(i);
+    }
   }
 
   // The padding, then the nearest bonded sample of each particle (ties: the lower sample index), four bonds at a
