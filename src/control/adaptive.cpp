@@ -49,6 +49,14 @@ void sample_range(std::size_t m, int T, int t, std::size_t& b, std::size_t& e) {
   e = std::min(m, b + chunk);
 }
 
+// Calls f(j) for each fluid particle j bonded to a sample, from the sample's pairs r and its bond masks (one bit
+// per pair, a byte per group of four).
+template <class F>
+inline void for_each_bond(const core::NeighborRange& r, const std::uint8_t* mask, Index groups, F&& f) {
+  for (Index g = 0; g < groups; ++g)
+    for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
+}
+
 // Where the padding of the bond lists points: far from any fluid (r² ≈ 3e36, still finite), with w = 0.
 constexpr float kSentinelCoord = 1e18f;
 
@@ -243,10 +251,8 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     sample_range(m, T, t, b, e);
     for (std::size_t i = b; i < e; ++i) {
       fill_sample(i);
-      const core::NeighborRange r = cf_.of(i);
-      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
-      for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
-        for (unsigned bits = mask[g]; bits; bits &= bits - 1) ++count[r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]];
+      for_each_bond(cf_.of(i), bond_mask_.data() + grp_base_[i], grp_base_[i + 1] - grp_base_[i],
+                    [&](Index j) { ++count[j]; });
     }
   }
   build_bonds(p);
@@ -254,9 +260,8 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
 
 // Bonds B(j), CSR over the fluid, as the transpose of the sample → fluid pairs with |x_ci − x_j| ≤ H_c*,i: a
 // counting sort in which thread t counts (in the fill pass) and then places the bonds of its contiguous range of
-// samples. Within a
-// particle, bonds are in ascending sample order for any thread count (thread ranges are ordered), so the result
-// is thread-count invariant. A fluid particle is controlled iff it has a bond (METHOD §a.5).
+// samples. Within a particle, bonds are in ascending sample order for any thread count (thread ranges are
+// ordered), so the result is thread-count invariant. A fluid particle is controlled iff it has a bond (METHOD §a.5).
 void AdaptiveController::build_bonds(sim::ParticleSet& p) {
   const std::size_t n = p.size(), m = xc_.size();
   const Vec3f* x = p.position.data();
@@ -283,13 +288,9 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     Index* cursor = cursor_.data() + static_cast<std::size_t>(t) * n;
     std::size_t b, e;
     sample_range(m, T, t, b, e);
-    for (std::size_t i = b; i < e; ++i) {
-      const core::NeighborRange r = cf_.of(i);
-      const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
-      for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
-        for (unsigned bits = mask[g]; bits; bits &= bits - 1)
-          bond_idx_[cursor[r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]]++] = static_cast<Index>(i);
-    }
+    for (std::size_t i = b; i < e; ++i)
+      for_each_bond(cf_.of(i), bond_mask_.data() + grp_base_[i], grp_base_[i + 1] - grp_base_[i],
+                    [&](Index j) { bond_idx_[cursor[j]++] = static_cast<Index>(i); });
   }
 
   // The padding, then the nearest bonded sample of each particle (ties: the lower sample index), four bonds at a
