@@ -49,14 +49,6 @@ void sample_range(std::size_t m, int T, int t, std::size_t& b, std::size_t& e) {
   e = std::min(m, b + chunk);
 }
 
-// Calls f(j) for each fluid particle j bonded to a sample, from the sample's pairs r and its bond masks (one bit
-// per pair, a byte per group of four).
-template <class F>
-inline void for_each_bond(const core::NeighborRange& r, const std::uint8_t* mask, Index groups, F&& f) {
-  for (Index g = 0; g < groups; ++g)
-    for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
-}
-
 // Where the padding of the bond lists points: far from any fluid (r² ≈ 3e36, still finite), with w = 0.
 constexpr float kSentinelCoord = 1e18f;
 
@@ -162,6 +154,15 @@ void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) {
   motion_[target].live = pose;
 }
 
+// The bond masks hold a byte per group of four pairs, one bit per pair.
+template <class F>
+void AdaptiveController::for_each_bond(std::size_t i, F&& f) const {
+  const core::NeighborRange r = cf_.of(i);
+  const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+  for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
+    for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
+}
+
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
@@ -251,8 +252,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     sample_range(m, T, t, b, e);
     for (std::size_t i = b; i < e; ++i) {
       fill_sample(i);
-      for_each_bond(cf_.of(i), bond_mask_.data() + grp_base_[i], grp_base_[i + 1] - grp_base_[i],
-                    [&](Index j) { ++count[j]; });
+      for_each_bond(i, [&](Index j) { ++count[j]; });
     }
   }
   build_bonds(p);
@@ -289,8 +289,7 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     std::size_t b, e;
     sample_range(m, T, t, b, e);
     for (std::size_t i = b; i < e; ++i)
-      for_each_bond(cf_.of(i), bond_mask_.data() + grp_base_[i], grp_base_[i + 1] - grp_base_[i],
-                    [&](Index j) { bond_idx_[cursor[j]++] = static_cast<Index>(i); });
+      for_each_bond(i, [&](Index j) { bond_idx_[cursor[j]++] = static_cast<Index>(i); });
   }
 
   // The padding, then the nearest bonded sample of each particle (ties: the lower sample index), four bonds at a

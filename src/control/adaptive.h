@@ -55,6 +55,9 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   void control_correction(sim::ParticleSet& p, float dt);
   void gather(sim::ParticleSet& p);
   void build_bonds(sim::ParticleSet& p);
+  // Calls f(j) for each fluid particle j bonded to sample i (its pairs in cf_, one bit each in bond_mask_).
+  template <class F>
+  void for_each_bond(std::size_t i, F&& f) const;
 
   ControlContext ctx_;
   AdaptiveParams params_;
