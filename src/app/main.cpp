@@ -286,6 +286,8 @@ int main(int argc, char** argv) {
   serve->add_option("--exit-after", serve_opt.serve.exit_after, "stop after this many seconds (default: at Ctrl-C)");
   serve->add_flag("--as-fast-as-possible", serve_opt.as_fast_as_possible,
                   "simulate as fast as the machine can (default: at most real time)");
+  serve->add_option("--max-fps", serve_opt.serve.max_fps,
+                    "at most this many simulated frames per second of wall time (default 0: no cap)");
 
   try {
     app.parse(argc, argv);

@@ -34,6 +34,7 @@ using nlohmann::json;
 Status ServeOptions::validate() const {
   FF_CHECK(server.validate());
   if (!(exit_after >= 0.0 && exit_after <= 1e7)) return param_error("--exit-after must be in [0, 1e7] s");
+  if (!(max_fps >= 0.0 && max_fps <= 1000.0)) return param_error("--max-fps must be in [0, 1000] (0: no cap)");
   return {};
 }
 
@@ -201,7 +202,10 @@ void error_text(Shared& sh, const std::string& what) {
 // The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
 void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
   RateMeter rate;
-  Pacer pace(scene.fps());
+  // Real time paces at the scene's frame rate; --max-fps caps the wall rate below that (or, as fast as possible, alone).
+  const double cap = opt.max_fps > 0 ? opt.max_fps : 0.0;
+  const bool paced = opt.realtime || cap > 0;
+  Pacer pace(opt.realtime ? (cap > 0 ? std::min(cap, scene.fps()) : scene.fps()) : (cap > 0 ? cap : scene.fps()));
   std::uint64_t frames = 0;
   double step_total = 0.0, last_surface = -kSurfaceEvery;
   int surface_frame = -1;
@@ -261,7 +265,7 @@ void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core:
     const FrameInfo info{static_cast<std::uint32_t>(f->frame), f->time, static_cast<float>(1e3 * f->step_seconds),
                          static_cast<float>(f->error_rate), rate.tick(), static_cast<std::uint32_t>(f->controlled)};
     publish_particles(info);
-    if (opt.realtime) {
+    if (paced) {
       // At most real time: the viewer shows the forming at its true speed when the simulation is faster.
       if (const double wait = pace.wait(); wait > 0) sh.commands.wait(wait, sh.stop);
     }
@@ -310,8 +314,8 @@ json playback_hello(const Recording& r, bool paused) {
           {"animation", r.animation ? json("/run/animation.glb") : json(nullptr)}};
 }
 
-void playback_loop(const Recording& rec, Shared& sh) {
-  Pacer pace(rec.fps);
+void playback_loop(const Recording& rec, Shared& sh, const ServeOptions& opt) {
+  Pacer pace(opt.max_fps > 0 ? std::min(opt.max_fps, rec.fps) : rec.fps);
   RateMeter rate;
   std::size_t k = 0;
   while (!sh.stop) {
@@ -407,7 +411,7 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
 
   std::thread sim([&] {
     if (live) live_loop(*live, sh, opt, progress);
-    else playback_loop(*rec, sh);
+    else playback_loop(*rec, sh, opt);
   });
   {
     std::unique_lock lock(done_mu);

@@ -22,6 +22,8 @@ struct ServeOptions {
   std::optional<std::string> controller;  ///< overrides the scene's controller
   std::vector<std::filesystem::path> meshes;  ///< more meshes for the viewer's mesh list (live mode)
   bool realtime = true;          ///< at most fps frames per second of wall time (false: as fast as it runs)
+  double max_fps = 0.0;          ///< cap on simulated frames per second of wall time (0: none), to share a machine
+                                 ///< or make the simulation slower than the display on purpose (the viewer's tests)
   double exit_after = 0.0;       ///< s of wall time, then a clean exit (0: until Ctrl-C); for scripts and tests
   Status validate() const;
 };
