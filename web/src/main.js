@@ -1,7 +1,14 @@
-// fluidform's live viewer: frames from `fluidform serve` over a WebSocket (protocol.js), drawn with three.js; orbit
-// controls, play/pause/restart, the controller switch, target dragging and mesh swaps, a HUD, and VR/AR buttons that
-// enter an immersive WebXR session where the browser supports one. In playback (a finished run) the run's
-// animation.glb plays in step with the particle frames.
+// fluidform's live viewer: frames from `fluidform serve` over a WebSocket (protocol.js), received and decoded in a
+// Worker (frame_worker.js), drawn with three.js at the display's rate whatever the simulation's: every display frame
+// places the particles between the last two frames received, by their simulation times (interpolate.js; the GPU mixes
+// the two, particles.js). Three looks: liquid (screen-space fluid rendering, liquid.js; the default, with a fall back
+// to spheres when the measured frame time cannot hold the display rate), spheres, and the mesh. Orbit controls,
+// play/pause/restart, the controller switch, target dragging and mesh swaps, a HUD, and VR/AR buttons that enter an
+// immersive WebXR session where the browser supports one (asking for the headset's highest frame rate). In playback
+// (a finished run) the run's animation.glb plays in step with the particle frames.
+//
+// URL flags (for the browser test and for comparisons): ?look=liquid|spheres|mesh picks the look and turns the
+// automatic fall back off; ?decode=main receives and decodes frames on the main thread (the old path).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -9,10 +16,16 @@ import { VRButton } from 'three/addons/webxr/VRButton.js';
 import { ARButton } from 'three/addons/webxr/ARButton.js';
 import * as protocol from './protocol.js';
 import { Hud, RateCounter } from './hud.js';
-import { ParticleView } from './particles.js';
+import { ParticleView, FF_POSITION_GLSL } from './particles.js';
+import { LiquidRenderer } from './liquid.js';
+import { FrameClock } from './interpolate.js';
+import { createFrameSource } from './source.js';
 import { TargetBoxes } from './targets.js';
 
 const $ = (id) => document.getElementById(id);
+const params = new URLSearchParams(location.search);
+const LOOKS = ['liquid', 'spheres', 'mesh'];
+const forcedLook = LOOKS.includes(params.get('look')) ? params.get('look') : null;
 
 // What the page knows, also read by the browser test (web/test/viewer.test.mjs).
 const state = {
@@ -20,33 +33,56 @@ const state = {
   hello: null,
   framesReceived: 0,
   bytesReceived: 0,
+  particlesReceived: 0,  // summed over frames: bytes per particle = bytesReceived / particlesReceived
   badFrames: 0,
-  frame: null,          // header fields of the newest frame
-  history: [],          // {frame, time, error} of the last frames received (at most 4000)
-  poses: [],            // the server's last pose per target
+  frame: null,           // header fields of the newest frame
+  previousFrame: -1,     // frame number of the one received before it
+  history: [],           // {frame, time, error} of the last frames received (at most 4000)
+  poses: [],             // the server's last pose per target
   poseAcks: 0,
   errors: [],
   animation: { loaded: false, duration: 0, clips: 0, meshes: 0, time: 0 },
-  renderedFrames: 0,
-  // Drawing on demand: a new frame, a camera move, a drag or a resize asks for one draw; nothing changing draws
-  // nothing, so an idle viewer leaves the CPU (and, on the test machine, the simulation's cores) alone. `continuous`
-  // draws every display frame (the browser test sets it to measure the render rate). An XR session always draws.
-  continuous: false,
-  xr: { presenting: false, mode: null, sessions: 0, renderedFrames: 0 },
+  renderedFrames: 0,     // display frames drawn
+  decode: 'worker',      // where frames are received and decoded: 'worker' or 'main' (?decode=main)
+  // Main-thread time (ms, summed): handling received frames (and decoding them, on the old path) and the render loop.
+  main: { ingestMs: 0, decodeMs: 0, renderMs: 0, ingested: 0, workerDecodeMs: 0 },
+  interp: { discontinuities: 0, alpha: 1, time: NaN },
+  gpu: '',
+  look: { mode: forcedLook ?? 'liquid', auto: !forcedLook, fellBack: false, liquidFrameMs: NaN, displayMs: NaN,
+          reason: '' },
+  // Pointer moves of a dragged target; draws that followed one (checked) and showed the box where the move put it.
+  drag: { moves: 0, checked: 0, drawnNext: 0, lagMs: [] },
+  xr: { presenting: false, mode: null, sessions: 0, renderedFrames: 0, frameRateRequested: null, frameRate: null,
+        supportedFrameRates: null, frameRateError: null },
   surface: { received: 0, vertices: 0, triangles: 0, frame: -1, buildMs: NaN },  // the newest live surface
 };
 window.__ff = state;
+// Desktop only: a display frame in which nothing changed (no new in-between, camera, drag, resize) is not drawn again.
 let dirty = true;
 const redraw = () => (dirty = true);
 
+// Software WebGL (SwiftShader on headless test machines, llvmpipe) fills pixels slowly: no multisampling there, and
+// the liquid's passes at half resolution (?liquid-scale= overrides). Asked of a throwaway context first, since
+// multisampling is chosen when the renderer's context is made.
+const gpuName = (() => {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  if (!gl) return '';
+  const ext = gl.getExtension('WEBGL_debug_renderer_info');
+  const name = String(ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
+  gl.getExtension('WEBGL_lose_context')?.loseContext();
+  return name;
+})();
+const softwareGl = /swiftshader|llvmpipe|software/i.test(gpuName);
+
 // Renderer, scene, camera.
-const renderer = new THREE.WebGLRenderer({ antialias: true });
+const renderer = new THREE.WebGLRenderer({ antialias: !softwareGl });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
 renderer.setSize(window.innerWidth, window.innerHeight);
 renderer.xr.enabled = true;
 document.body.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
-scene.background = new THREE.Color(0x111418);
+const BACKGROUND = 0x111418;
+scene.background = new THREE.Color(BACKGROUND);
 scene.add(new THREE.HemisphereLight(0xdde8ff, 0x303030, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 sun.position.set(2, 4, 3);
@@ -64,14 +100,17 @@ const world = new THREE.Group();
 scene.add(world);
 const particles = new ParticleView();
 world.add(particles.points);
+const liquid = new LiquidRenderer(renderer, particles);
+liquid.scale = Number(params.get('liquid-scale')) || (softwareGl ? 0.5 : 1);
+const clock = new FrameClock();
 const boxes = new TargetBoxes(world, (t, tr, rot, s) => send(protocol.setPose(t, tr, rot, s)));
 let meshRoot = null, mixer = null;
 
+const drawingSize = new THREE.Vector2();
 function resize() {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
-  particles.setViewport(window.innerHeight * renderer.getPixelRatio(), camera.fov);
   redraw();
 }
 window.addEventListener('resize', resize);
@@ -87,67 +126,55 @@ xr.append(vr, ar);
 const hud = new Hud();
 const renderRate = new RateCounter(), recvRate = new RateCounter();
 
-// Connection.
-let ws = null;
+// Connection: the frame source (the Worker, or the main thread with ?decode=main).
+state.decode = params.get('decode') === 'main' ? 'main' : 'worker';
+const source = createFrameSource({
+  worker: state.decode === 'worker',
+  url: `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`,
+  onOpen: () => { state.connected = true; hud.status('connected'); },
+  onClose: () => { state.connected = false; hud.status('disconnected; retrying…'); },
+  onText,
+  onFrame,
+  onSurface,
+  onBad: () => (state.badFrames += 1),
+});
 function send(text) {
-  if (ws && ws.readyState === WebSocket.OPEN) ws.send(text);
-}
-function connect() {
-  const url = `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`;
-  ws = new WebSocket(url);
-  ws.binaryType = 'arraybuffer';
-  ws.onopen = () => { state.connected = true; hud.status('connected'); };
-  ws.onclose = () => {
-    state.connected = false;
-    hud.status('disconnected; retrying…');
-    setTimeout(connect, 1000);
-  };
-  ws.onmessage = (ev) => {
-    if (typeof ev.data === 'string') onText(ev.data);
-    else if (protocol.isSurface(ev.data)) onSurface(ev.data);
-    else onFrame(ev.data);
-  };
+  source.send(text);
 }
 
-let decoded = null;
-function onFrame(buffer) {
-  try {
-    decoded = protocol.decodeFrame(buffer, decoded);
-  } catch (e) {
-    state.badFrames += 1;
+let holding = false;  // the browser test's hold: frames are counted and dropped, the drawing stays where it is
+function onFrame(f, decodeMs) {
+  const t0 = performance.now();
+  state.framesReceived += 1;
+  state.bytesReceived += f.bytes;
+  state.particlesReceived += f.count;
+  if (state.decode === 'main') state.main.decodeMs += decodeMs;
+  else state.main.workerDecodeMs += decodeMs;
+  recvRate.tick(t0);
+  if (holding) {
+    source.recycle(f);
     return;
   }
-  state.framesReceived += 1;
-  state.bytesReceived += buffer.byteLength;
-  recvRate.tick();
-  const { frame, count, time, stepMs, errorRate, simFps, controlled } = decoded;
-  // The fluid's centroid: the browser test checks that the formed shape followed a dragged target.
-  const c = [0, 0, 0];
-  for (let i = 0; i < 3 * count; i += 3) c[0] += decoded.positions[i], c[1] += decoded.positions[i + 1], c[2] += decoded.positions[i + 2];
-  const centroid = c.map((v) => v / Math.max(1, count));
+  const { frame, count, time, stepMs, errorRate, simFps, controlled, centroid } = f;
+  state.previousFrame = state.frame ? state.frame.frame : -1;
   state.frame = { frame, count, time, stepMs, errorRate, simFps, controlled, centroid };
-  state.history.push({ frame, time, error: errorRate, centroid, wall: performance.now(), received: state.framesReceived });
+  state.history.push({ frame, time, error: errorRate, centroid, wall: t0, received: state.framesReceived });
   if (state.history.length > 4000) state.history.splice(0, 1000);
-  particles.update(decoded);
-  if (mixer && state.animation.duration > 0) {
-    mixer.setTime(time % state.animation.duration);
-    state.animation.time = time;
-  }
-  hud.update({ stepMs, simFps, count, errorRate, time });
+  const continues = clock.push({ frame, time, count }, t0);
+  particles.push(f.positions, f.targets, count, continues);
+  source.recycle(f);  // the buffers go back to the decoder: the data now lives in the GPU attributes
+  state.interp.discontinuities = clock.discontinuities;
+  const v = hud.values;  // the text is written on the HUD's own tick (4 per second), not per frame
+  v.stepMs = stepMs, v.simFps = simFps, v.count = count, v.errorRate = errorRate, v.time = time;
   redraw();
+  state.main.ingestMs += performance.now() - t0;
+  state.main.ingested += 1;
 }
 
 // The live surface: one mesh, its geometry replaced by each new surface.
 const surfaceMaterial = new THREE.MeshStandardMaterial({ color: 0x9ecbff, roughness: 0.35, metalness: 0.0, transparent: true, opacity: 0.85 });
 let liveSurface = null;
-function onSurface(buffer) {
-  let s;
-  try {
-    s = protocol.decodeSurface(buffer);
-  } catch (e) {
-    state.badFrames += 1;
-    return;
-  }
+function onSurface(s) {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(s.positions, 3));
   g.setIndex(new THREE.BufferAttribute(s.indices, 1));
@@ -200,7 +227,10 @@ function onHello(h) {
   state.hello = h;
   hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
-  if (h.radius) particles.setRadius(h.radius);
+  if (h.radius) {
+    particles.setRadius(h.radius);
+    liquid.setRadius(h.radius);
+  }
   fillSelect($('sel-controller'), h.controllers ?? [], (h.controllers ?? []).indexOf(h.controller));
   fillSelect($('sel-mesh'), h.meshes ?? [], h.targets?.[0]?.mesh ?? 0);
   boxes.set(h.targets ?? []);
@@ -254,6 +284,23 @@ function loadAnimation(url) {
   }, undefined, (e) => state.errors.push(`animation: ${e.message ?? e}`));
 }
 
+// The look: liquid, spheres or the mesh. Picking one by hand (or by ?look=) turns the automatic fall back off.
+function setLook(mode, auto = false, reason = '') {
+  if (!LOOKS.includes(mode) && mode !== 'none') return;  // 'none': no fluid at all (the test's background shot)
+  state.look.mode = mode;
+  state.look.auto = auto && state.look.auto;
+  if (reason) state.look.reason = reason;
+  if (mode !== 'none') $('sel-look').value = mode;
+  particles.points.visible = mode === 'spheres';
+  if (mode === 'mesh' && !$('chk-mesh').checked) {
+    $('chk-mesh').checked = true;
+    $('chk-mesh').dispatchEvent(new Event('change'));
+  }
+  perf.reset();
+  hud.look(mode + (state.look.fellBack ? ' (fell back)' : ''));
+  redraw();
+}
+
 // Panel.
 $('btn-play').onclick = () => {
   const paused = $('btn-play').textContent === 'pause';
@@ -263,7 +310,7 @@ $('btn-play').onclick = () => {
 $('btn-restart').onclick = () => send(protocol.restart());
 $('sel-controller').onchange = (e) => send(protocol.setController(state.hello.controllers[Number(e.target.value)]));
 $('sel-mesh').onchange = (e) => send(protocol.setMesh(0, Number(e.target.value)));
-$('chk-particles').onchange = (e) => { particles.points.visible = e.target.checked; redraw(); };
+$('sel-look').onchange = (e) => setLook(e.target.value, false);
 $('chk-mesh').onchange = (e) => {
   if (meshRoot) meshRoot.visible = e.target.checked;
   if (liveSurface) liveSurface.visible = e.target.checked;
@@ -271,15 +318,17 @@ $('chk-mesh').onchange = (e) => {
   redraw();
 };
 
-// Mouse dragging of targets (orbit controls are off while a target is held).
+// Mouse dragging of targets (orbit controls are off while a target is held). The box follows the pointer at once,
+// locally, and is drawn in the next display frame; the server gets the pose (throttled) and the fluid follows.
 const pointer = new THREE.Vector2();
+const raycaster = new THREE.Raycaster();
 function rayAt(ev) {
   const r = renderer.domElement.getBoundingClientRect();
   pointer.set(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
-  const rc = new THREE.Raycaster();
-  rc.setFromCamera(pointer, camera);
-  return rc.ray;
+  raycaster.setFromCamera(pointer, camera);
+  return raycaster.ray;
 }
+let pendingMove = null;  // {index, position, at}: a pointer move not drawn yet (for the test's same-frame check)
 renderer.domElement.addEventListener('pointerdown', (ev) => {
   if (ev.button !== 0 || state.hello?.mode !== 'live') return;
   const normal = camera.getWorldDirection(new THREE.Vector3()).negate();
@@ -292,6 +341,9 @@ renderer.domElement.addEventListener('pointerdown', (ev) => {
 renderer.domElement.addEventListener('pointermove', (ev) => {
   if (!boxes.drag) return;
   boxes.move(rayAt(ev));
+  const g = boxes.targets[boxes.drag.index].group;
+  state.drag.moves += 1;
+  pendingMove = { index: boxes.drag.index, position: g.position.clone(), rotation: g.rotation.y, at: performance.now() };
   redraw();
 });
 const release = () => {
@@ -303,7 +355,8 @@ renderer.domElement.addEventListener('pointerup', release);
 renderer.domElement.addEventListener('pointercancel', release);
 
 // XR controllers: point at a target box and hold the trigger to carry it; hold the grip (squeeze) too to turn it
-// about the vertical axis instead.
+// about the vertical axis instead. The controller's pose is read in the render loop, before the draw: the box moves
+// in the display frame the controller did.
 for (let i = 0; i < 2; ++i) {
   const ctl = renderer.xr.getController(i);
   const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(0, 0, -1)]),
@@ -311,17 +364,19 @@ for (let i = 0; i < 2; ++i) {
   line.scale.z = 5;
   ctl.add(line);
   scene.add(ctl);
+  const m = new THREE.Matrix4(), ray = new THREE.Ray();
   const ctlRay = () => {
-    const m = new THREE.Matrix4().extractRotation(ctl.matrixWorld);
-    const origin = new THREE.Vector3().setFromMatrixPosition(ctl.matrixWorld);
-    return new THREE.Ray(origin, new THREE.Vector3(0, 0, -1).applyMatrix4(m).normalize());
+    m.extractRotation(ctl.matrixWorld);
+    ray.origin.setFromMatrixPosition(ctl.matrixWorld);
+    ray.direction.set(0, 0, -1).applyMatrix4(m).normalize();
+    return ray;
   };
   ctl.addEventListener('squeezestart', () => (ctl.userData.squeezing = true));
   ctl.addEventListener('squeezeend', () => (ctl.userData.squeezing = false));
   ctl.addEventListener('selectstart', () => {
     if (state.hello?.mode !== 'live') return;
-    const ray = ctlRay();
-    if (boxes.begin(ray, ray.direction.clone().negate(), Boolean(ctl.userData.squeezing))) ctl.userData.dragging = true;
+    const r = ctlRay();
+    if (boxes.begin(r, r.direction.clone().negate(), Boolean(ctl.userData.squeezing))) ctl.userData.dragging = true;
   });
   ctl.addEventListener('selectend', () => {
     if (ctl.userData.dragging) boxes.end();
@@ -342,48 +397,153 @@ function placeForXr(ar) {
   const ahead = ar ? 1.2 : 1.0 + r;
   world.position.set(-s * c.x, (ar ? 0.8 : 0) - s * box.min.y, -ahead - s * c.z);
 }
+let xrAr = false;
 renderer.xr.addEventListener('sessionstart', () => {
   const session = renderer.xr.getSession();
   const ar = Boolean(session && session.environmentBlendMode && session.environmentBlendMode !== 'opaque');
+  xrAr = ar;
   state.xr = { ...state.xr, presenting: true, mode: ar ? 'immersive-ar' : 'immersive-vr', sessions: state.xr.sessions + 1 };
   placeForXr(ar);
   if (ar) {
     scene.background = null;
     grid.visible = false;
   }
+  // The headset's highest frame rate: the viewer does not wait for the simulation, so it can draw at any of them.
+  const rates = session?.supportedFrameRates;
+  state.xr.frameRate = session?.frameRate ?? null;
+  if (rates && rates.length && typeof session.updateTargetFrameRate === 'function') {
+    const best = Math.max(...rates);
+    state.xr.supportedFrameRates = [...rates];
+    state.xr.frameRateRequested = best;
+    session.updateTargetFrameRate(best)
+      .then(() => { state.xr.frameRate = session.frameRate ?? best; perf.reset(); })
+      .catch((e) => (state.xr.frameRateError = String(e)));
+  }
+  perf.reset();
 });
 renderer.xr.addEventListener('sessionend', () => {
   state.xr = { ...state.xr, presenting: false };
+  xrAr = false;
   world.scale.setScalar(1);
   world.position.set(0, 0, 0);
-  scene.background = new THREE.Color(0x111418);
+  scene.background = new THREE.Color(BACKGROUND);
   grid.visible = true;
+  perf.reset();
   redraw();
 });
 
-// Render loop (the XR loop when a session is on).
-let lastHud = 0;
-renderer.setAnimationLoop((now) => {
+// Frame time, for the automatic fall back from liquid to spheres. The display's frame period: in XR the session's
+// frame rate; on the desktop measured at start, over display frames in which nothing is drawn. Then the median
+// period between consecutive drawn frames in liquid mode, after a second to settle (shaders compile, targets are
+// made): more than 1.25 periods (and 2 ms) is a display rate it cannot hold.
+const perf = {
+  calib: new Float32Array(30), nCalib: 0, displayMs: NaN,
+  deltas: new Float32Array(30), n: 0, since: 0, last: -1, lastDrew: false,
+  reset() { this.n = 0; this.since = performance.now(); this.lastDrew = false; },
+  median(a, n) {
+    const s = this.sorted ?? (this.sorted = new Float32Array(64));
+    for (let i = 0; i < n; ++i) s[i] = a[i];
+    const v = s.subarray(0, n).sort();
+    return v[n >> 1];
+  },
+  display() {
+    if (renderer.xr.isPresenting && state.xr.frameRate) return 1000 / state.xr.frameRate;
+    return this.displayMs;
+  },
+};
+function frameTiming(now, drew) {
+  const delta = perf.last >= 0 ? now - perf.last : NaN;
+  perf.last = now;
+  if (!renderer.xr.isPresenting && perf.nCalib < perf.calib.length) {
+    if (Number.isFinite(delta)) perf.calib[perf.nCalib++] = delta;
+    if (perf.nCalib === perf.calib.length) {
+      perf.displayMs = Math.max(4, perf.median(perf.calib, perf.nCalib));
+      state.look.displayMs = perf.displayMs;
+      perf.reset();
+    }
+    return;
+  }
+  if (drew && perf.lastDrew && Number.isFinite(delta) && now - perf.since > 1000 && perf.n < perf.deltas.length)
+    perf.deltas[perf.n++] = delta;
+  perf.lastDrew = drew;
+  if (perf.n < perf.deltas.length) return;
+  const ms = perf.median(perf.deltas, perf.n), display = perf.display();
+  perf.n = 0;
+  perf.since = now;
+  if (state.look.mode !== 'liquid') return;
+  state.look.liquidFrameMs = ms;
+  state.look.displayMs = display;
+  if (state.look.auto && Number.isFinite(display) && ms > 1.25 * display + 2) {
+    state.look.fellBack = true;
+    setLook('spheres', true, `liquid drew a frame every ${ms.toFixed(1)} ms, the display every ${display.toFixed(1)} ms`);
+  }
+}
+
+// Render loop (the XR loop when a session is on): every display frame.
+let lastHud = 0, lastAlpha = -1, lastSeq = -1, held = false, heldAlpha = 1, suspended = false;
+const drawnTarget = [NaN, NaN, NaN], tmpV = new THREE.Vector3();
+function frameLoop(now) {
+  const t0 = performance.now();
   for (let i = 0; i < 2; ++i) {
     const ctl = renderer.xr.getController(i);
-    if (ctl.userData.dragging) boxes.move(ctl.userData.ray());
+    if (ctl.userData.dragging) {
+      boxes.move(ctl.userData.ray());
+      dirty = true;
+    }
   }
   if (!renderer.xr.isPresenting) controls.update();
+  const alpha = held ? heldAlpha : clock.update(t0);
+  particles.setAlpha(alpha);
+  state.interp.alpha = alpha;
+  state.interp.time = clock.time;
+  if (mixer && state.animation.duration > 0 && Number.isFinite(clock.time)) {
+    mixer.setTime(clock.time % state.animation.duration);
+    state.animation.time = clock.time;
+  }
   if (now - lastHud > 250) {
     lastHud = now;
     hud.update({ fps: renderRate.rate(now), recvFps: recvRate.rate(now) });
-    state.hud = { ...hud.values };
+    state.hud = hud.values;
   }
-  if (renderer.xr.isPresenting) state.xr.renderedFrames += 1;
-  else if (!dirty && !state.continuous) return;
-  dirty = false;
-  renderer.render(scene, camera);
-  state.renderedFrames += 1;
-  renderRate.tick(now);
-});
+  const presenting = renderer.xr.isPresenting;
+  let draw = presenting || dirty || alpha !== lastAlpha || clock.seq !== lastSeq;
+  if (!presenting && perf.nCalib < perf.calib.length) draw = false;  // measuring the display rate first
+  if (draw) {
+    dirty = false;
+    lastAlpha = alpha;
+    lastSeq = clock.seq;
+    let eyeHeight;
+    if (presenting) eyeHeight = renderer.xr.getCamera().cameras[0]?.viewport.w || renderer.getDrawingBufferSize(drawingSize).y;
+    else eyeHeight = renderer.getDrawingBufferSize(drawingSize).y;
+    particles.setViewportHeight(eyeHeight);
+    if (state.look.mode === 'liquid' && particles.count > 0) {
+      particles.points.visible = false;
+      liquid.render(scene, camera, world, eyeHeight, presenting && xrAr);
+    } else {
+      particles.points.visible = state.look.mode === 'spheres';
+      renderer.render(scene, camera);
+    }
+    state.renderedFrames += 1;
+    if (presenting) state.xr.renderedFrames += 1;
+    renderRate.tick(now);
+    const g = boxes.targets[0]?.group;
+    if (g) g.getWorldPosition(tmpV).toArray(drawnTarget);
+    if (pendingMove) {
+      const pg = boxes.targets[pendingMove.index]?.group;
+      state.drag.checked += 1;
+      if (pg && pg.position.equals(pendingMove.position) && pg.rotation.y === pendingMove.rotation) state.drag.drawnNext += 1;
+      if (state.drag.lagMs.length < 200) state.drag.lagMs.push(performance.now() - pendingMove.at);
+      pendingMove = null;
+    }
+  }
+  frameTiming(now, draw);
+  state.main.renderMs += performance.now() - t0;
+}
+renderer.setAnimationLoop(frameLoop);
 
 // For tests and tools: where target i is on screen, and in the world (metres, after the XR placement).
 state.targetWorld = (i) => boxes.targets[i]?.group.getWorldPosition(new THREE.Vector3()).toArray() ?? null;
+state.drawnTarget = drawnTarget;
 state.worldScale = () => world.scale.x;
 state.targetScreen = (i) => boxes.screenPosition(i, camera, renderer.domElement);
 state.project = (p) => {
@@ -391,4 +551,86 @@ state.project = (p) => {
   const r = renderer.domElement.getBoundingClientRect();
   return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
 };
-connect();
+state.setLook = (mode) => setLook(mode, false);
+state.redraw = redraw;
+state.setBackground = (hex) => { scene.background = new THREE.Color(hex); redraw(); };
+// Hold: frames are counted but not shown, the drawing stays exactly where it is (the test's screenshots of one frame).
+state.hold = (on) => {
+  holding = Boolean(on);
+  held = holding;
+  heldAlpha = state.interp.alpha;
+  redraw();
+};
+// Stops (and restarts) the render loop: another page of the test measures alone.
+state.suspend = (on) => {
+  suspended = Boolean(on);
+  renderer.setAnimationLoop(suspended ? null : frameLoop);
+};
+state.liquidCoverage = () => {
+  const cams = renderer.xr.isPresenting ? renderer.xr.getCamera().cameras : null;
+  const vps = cams ? cams.map((c) => c.viewport.toArray()) : [[0, 0, liquid.size.x, liquid.size.y]];
+  return { viewports: vps, pixels: liquid.coverage(vps), frames: liquid.stats.frames };
+};
+
+// The interpolation, checked from the outside: for the sampled particles, their positions in the two frames of the
+// pair and where the GPU draws them now (the same vertex code as every look, read back from a float target).
+const probe = (() => {
+  const N = 32;
+  const rt = new THREE.WebGLRenderTarget(N, 1, { type: THREE.FloatType, minFilter: THREE.NearestFilter,
+                                                 magFilter: THREE.NearestFilter, depthBuffer: false });
+  const uniforms = { ...particles.uniforms, uIdx: { value: new Int32Array(N) }, uN: { value: 0 } };
+  const material = new THREE.ShaderMaterial({
+    uniforms, depthTest: false, depthWrite: false,
+    vertexShader: /* glsl */ `
+      ${FF_POSITION_GLSL}
+      uniform int uIdx[${N}];
+      uniform int uN;
+      varying vec3 vPos;
+      void main() {
+        int slot = -1;
+        for (int k = 0; k < ${N}; ++k) if (k < uN && uIdx[k] == gl_VertexID) slot = k;
+        vPos = ffPosition();
+        gl_PointSize = 1.0;
+        gl_Position = slot < 0 ? vec4(2.0, 2.0, 2.0, 1.0) : vec4((float(slot) + 0.5) / ${N}.0 * 2.0 - 1.0, 0.0, 0.0, 1.0);
+      }`,
+    fragmentShader: /* glsl */ `varying vec3 vPos; void main() { gl_FragColor = vec4(vPos, 1.0); }`,
+  });
+  const points = new THREE.Points(particles.geometry, material);
+  points.frustumCulled = false;
+  const s = new THREE.Scene();
+  s.add(points);
+  const cam = new THREE.OrthographicCamera();
+  const out = new Float32Array(4 * N);
+  return (indices) => {
+    const n = Math.min(N, indices.length);
+    for (let k = 0; k < n; ++k) uniforms.uIdx.value[k] = indices[k];
+    uniforms.uN.value = n;
+    const prev = renderer.getRenderTarget();
+    renderer.setRenderTarget(rt);
+    renderer.setClearColor(0x000000, 0);
+    renderer.clear();
+    renderer.render(s, cam);
+    renderer.readRenderTargetPixels(rt, 0, 0, N, 1, out);
+    renderer.setRenderTarget(prev);
+    renderer.setClearColor(0x000000, 1);
+    return Array.from({ length: n }, (_, k) => [out[4 * k], out[4 * k + 1], out[4 * k + 2]]);
+  };
+})();
+state.sampleInterpolation = (indices) => {
+  if (renderer.xr.isPresenting || !clock.b) return null;
+  const now = performance.now();
+  const alpha = held ? heldAlpha : clock.update(now);
+  particles.setAlpha(alpha);
+  const ids = indices.filter((i) => i < particles.count);
+  const drawn = probe(ids);
+  return {
+    alpha, time: clock.time, single: clock.single, a: { ...clock.a }, b: { ...clock.b }, interval: clock.interval,
+    newest: state.frame?.frame, previous: state.previousFrame,
+    samples: ids.map((i, k) => ({ i, older: [0, 1, 2].map((c) => particles.slotValue(0, i, c)),
+                                  newer: [0, 1, 2].map((c) => particles.slotValue(1, i, c)), drawn: drawn[k] })),
+  };
+};
+
+state.gpu = gpuName;
+state.look.liquidScale = liquid.scale;
+setLook(state.look.mode, state.look.auto);

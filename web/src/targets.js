@@ -5,6 +5,7 @@ import * as THREE from 'three';
 import { PALETTE } from './particles.js';
 
 const DEG = Math.PI / 180;
+const ZERO = [0, 0, 0];
 
 export class TargetBoxes {
   /**
@@ -19,6 +20,8 @@ export class TargetBoxes {
     this.raycaster = new THREE.Raycaster();
     this.drag = null;
     this.lastSent = 0;
+    this.tmp = new THREE.Vector3();
+    this.movePose = { translate: [0, 0, 0], rotate: [0, 0, 0], scale: 1 };
   }
 
   /** From the server's hello: every target's pivot, rest box and pose. */
@@ -46,11 +49,13 @@ export class TargetBoxes {
     });
   }
 
-  /** A pose from the server (or set locally while dragging). */
+  /** A pose from the server (or set locally while dragging); copied into the box's own arrays. */
   applyPose(i, pose) {
     const t = this.targets[i];
     if (!t || !pose) return;
-    t.pose = { translate: [...pose.translate], rotate: [...(pose.rotate ?? [0, 0, 0])], scale: pose.scale ?? 1 };
+    const r = pose.rotate ?? ZERO;
+    for (let k = 0; k < 3; ++k) t.pose.translate[k] = pose.translate[k], t.pose.rotate[k] = r[k];
+    t.pose.scale = pose.scale ?? 1;
     t.group.position.set(t.pivot.x + t.pose.translate[0], t.pivot.y + t.pose.translate[1], t.pivot.z + t.pose.translate[2]);
     t.group.rotation.set(t.pose.rotate[0] * DEG, t.pose.rotate[1] * DEG, t.pose.rotate[2] * DEG);
     t.group.scale.setScalar(t.pose.scale);
@@ -74,26 +79,29 @@ export class TargetBoxes {
     this.drag = { index: hit.index, plane: new THREE.Plane().setFromNormalAndCoplanarPoint(normal, hit.point),
                   offset: t.group.position.clone().sub(local), start: local, rotate,
                   rotate0: [...t.pose.rotate], distance: ray.origin.distanceTo(hit.point) };
+    t.pick.geometry.computeBoundingBox();
+    this.drag.width = t.pick.geometry.boundingBox.getSize(new THREE.Vector3()).x;
     return true;
   }
 
-  /** Moves the dragged target to follow `ray`. */
+  /** Moves the dragged target to follow `ray` (in place: an XR drag calls this every display frame). */
   move(ray, now = performance.now()) {
     const d = this.drag;
     if (!d) return;
-    const p = new THREE.Vector3();
+    const p = this.tmp;
     if (!ray.intersectPlane(d.plane, p)) ray.at(d.distance, p);
     this.scene.worldToLocal(p);
     const t = this.targets[d.index];
-    const pose = { translate: [...t.pose.translate], rotate: [...t.pose.rotate], scale: t.pose.scale };
+    const pose = this.movePose;
+    for (let k = 0; k < 3; ++k) pose.translate[k] = t.pose.translate[k], pose.rotate[k] = t.pose.rotate[k];
+    pose.scale = t.pose.scale;
     if (d.rotate) {
       // Sideways motion turns the target about the vertical axis: one target width ≈ 180°.
-      t.pick.geometry.computeBoundingBox();
-      const width = Math.max(1e-3, t.pick.geometry.boundingBox.getSize(new THREE.Vector3()).x * t.pose.scale);
+      const width = Math.max(1e-3, d.width * t.pose.scale);
       pose.rotate[1] = d.rotate0[1] + (180 * (p.x - d.start.x)) / width;
     } else {
       const c = p.add(d.offset);
-      pose.translate = [c.x - t.pivot.x, c.y - t.pivot.y, c.z - t.pivot.z];
+      pose.translate[0] = c.x - t.pivot.x, pose.translate[1] = c.y - t.pivot.y, pose.translate[2] = c.z - t.pivot.z;
     }
     this.applyPose(d.index, pose);
     if (now - this.lastSent >= this.throttleMs) this.flush(now);

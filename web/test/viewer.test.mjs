@@ -1,14 +1,27 @@
-// The live viewer end to end: `fluidform serve` on the default scene, the page in Debian's chromium (headless, off
-// the network) through playwright-core. Checks (each exits non-zero with a reason):
+// The live viewer end to end: `fluidform serve --max-fps 10` on the default scene (the simulation slower than the
+// display on purpose), the page in Debian's chromium (headless, off the network) through playwright-core. Checks (each
+// exits non-zero with a reason):
+//   - the frame clock (web/src/interpolate.js) on its own, in node: the pair, alpha, and what breaks the pair
 //   - at least 120 frames arrive, and a screenshot shows particles (pixels of the particle colours, not a blank canvas)
 //   - the HUD shows FPS and step time (read and printed)
-//   - dragging the target: the server reports the new transform, the error rate (measured against the moved target)
-//     jumps, and is back under 4 % within 3 simulated seconds
+//   - the look is chosen by measured frame time: liquid if it holds the display rate, else spheres (the fall back)
+//   - the viewer draws at least 2.5× as many frames as it receives, and sampled particles are drawn (read back from
+//     the GPU) between the two frames they interpolate, never more than one frame behind
+//   - frames stay ~7 bytes per particle on the WebSocket
+//   - the main thread's time per drawn frame with the frame Worker, printed next to the old path's (?decode=main)
+//   - liquid, spheres and mesh on one held frame (PNGs in --out): the liquid is one smooth surface (smoothness and
+//     coverage against the spheres) with the background visible through it (the background changed, the liquid
+//     changes with it; the spheres do not)
+//   - dragging the target: the box is drawn where the pointer put it in the next display frame, the server reports
+//     the new transform, the error rate (measured against the moved target) jumps, and is back under 4 % within 3
+//     simulated seconds (the time to 1 % is printed: the issue asks 1 % within 0.5 s)
 //   - /../../etc/passwd and encoded variants get 403/404 from the real server; garbage, binary and oversized
 //     WebSocket messages leave it serving
 //   - the controller switch reaches the server
+//   - WebXR on an emulated headset (IWER, stereo): the highest frame rate is requested, both eyes draw the liquid,
+//     the controller drag moves the target; AR places the content at table-top scale
 //   - Ctrl-C (SIGINT) stops the server with exit code 0 and frees its port
-//   - playback of a finished run (--playback OUT): frames and the mesh animation (animation.glb) play
+//   - playback of a finished run (--playback OUT): frames, interpolated, and the mesh animation (animation.glb) play
 // and prints the speed numbers: simulation steps per second of wall time, frames received per second, render FPS.
 // Usage: node web/test/viewer.test.mjs --binary BIN --scene SCENE.json [--cache DIR] [--mesh EXTRA.obj] [--playback OUT]
 //        [--chromium PATH] [--out DIR]
@@ -17,6 +30,7 @@ import fs from 'node:fs';
 import net from 'node:net';
 import path from 'node:path';
 import { chromium } from 'playwright-core';
+import { FrameClock } from '../src/interpolate.js';
 
 const args = {};
 for (let i = 2; i < process.argv.length; i += 2) args[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
@@ -47,7 +61,8 @@ const elapsed = () => ((Date.now() - t0) / 1000).toFixed(1);
 function startServer(input, extra = []) {
   // Passive OpenMP waiting: the simulation shares two cores with chromium's software renderer (as in scripts/test).
   const env = { OMP_WAIT_POLICY: 'PASSIVE', ...process.env };
-  const proc = spawn(exe, ['serve', input, '--port', '0', ...extra], { stdio: ['ignore', 'pipe', 'pipe'], env });
+  // --exit-after: a test killed half-way leaves no server behind for long (the test itself ends it with Ctrl-C).
+  const proc = spawn(exe, ['serve', input, '--port', '0', '--exit-after', '900', ...extra], { stdio: ['ignore', 'pipe', 'pipe'], env });
   let log = '';
   proc.stderr.on('data', (d) => (log += d));
   return new Promise((resolve, reject) => {
@@ -143,11 +158,189 @@ const reforms = async (page, t, what) => {
   return { ok, f: await page.evaluate(() => window.__ff.frame) };
 };
 
+// The frame clock on its own (no browser): interpolation within the pair, clamping, and the frames shown as they are.
+{
+  const c = new FrameClock();
+  c.push({ frame: 0, time: 0, count: 10 }, 0);
+  const first = c.update(50);
+  c.push({ frame: 1, time: 0.1, count: 10 }, 100);
+  const atArrival = c.update(100), half = c.update(150), halfTime = c.time, late = c.update(400);
+  const ok1 = first === 1 && atArrival === 0 && Math.abs(half - 0.5) < 1e-9 && Math.abs(halfTime - 0.05) < 1e-9 && late === 1;
+  const more = c.push({ frame: 2, time: 0.2, count: 12 }, 200);   // another particle count: shown as it is
+  const fresh = c.update(210);
+  c.push({ frame: 3, time: 0.3, count: 12 }, 300);
+  const back = c.push({ frame: 0, time: 0, count: 12 }, 400);     // a restart or a playback loop
+  c.push({ frame: 1, time: 0.0166, count: 12 }, 500);
+  const jump = c.push({ frame: 500, time: 8.3, count: 12 }, 600); // a seek
+  check(ok1 && !more && fresh === 1 && !back && !jump && c.discontinuities === 3,
+        `frame clock: alpha 0 at the newest frame's arrival, ${half} half way, 1 when late; a changed count, time going ` +
+        `back and a jump are shown as they are (${c.discontinuities} discontinuities)`);
+}
+
+// Screenshot metrics for the looks on one held frame. Masks: pixels that differ from the shot without any fluid.
+// Roughness: mean |Laplacian| of the luminance inside the fluid (pixels 2 px in from the edge of both masks), which
+// sphere shading and the gaps between spheres raise and one smooth surface does not. Holes: uncovered pixels that
+// cannot be reached from the image border (gaps inside the silhouette). See-through: how much of a change of the
+// background shows inside the fluid (0: opaque).
+async function lookMetrics(page, shots) {
+  const b64 = Object.fromEntries(Object.entries(shots).map(([k, v]) => [k, v.toString('base64')]));
+  return page.evaluate(async (b64s) => {
+    const im = {};
+    let W = 0, H = 0;
+    for (const [k, v] of Object.entries(b64s)) {
+      const img = new Image();
+      img.src = `data:image/png;base64,${v}`;
+      await img.decode();
+      const c = document.createElement('canvas');
+      W = c.width = img.width;
+      H = c.height = img.height;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      im[k] = g.getImageData(0, 0, W, H).data;
+    }
+    const N = W * H;
+    const lum = (a, i) => 0.299 * a[4 * i] + 0.587 * a[4 * i + 1] + 0.114 * a[4 * i + 2];
+    const mask = (a) => {
+      const m = new Uint8Array(N);
+      for (let i = 0; i < N; ++i) {
+        const d = Math.abs(a[4 * i] - im.bg[4 * i]) + Math.abs(a[4 * i + 1] - im.bg[4 * i + 1]) + Math.abs(a[4 * i + 2] - im.bg[4 * i + 2]);
+        m[i] = d > 30 ? 1 : 0;
+      }
+      return m;
+    };
+    const count = (m) => m.reduce((s, v) => s + v, 0);
+    const holes = (m) => {
+      const seen = new Uint8Array(N), stack = [];
+      for (let x = 0; x < W; ++x) stack.push(x, (H - 1) * W + x);
+      for (let y = 0; y < H; ++y) stack.push(y * W, y * W + W - 1);
+      let reached = 0;
+      while (stack.length) {
+        const i = stack.pop();
+        if (seen[i] || m[i]) continue;
+        seen[i] = 1;
+        reached += 1;
+        const x = i % W, y = (i / W) | 0;
+        if (x > 0) stack.push(i - 1);
+        if (x < W - 1) stack.push(i + 1);
+        if (y > 0) stack.push(i - W);
+        if (y < H - 1) stack.push(i + W);
+      }
+      return N - count(m) - reached;
+    };
+    const ms = mask(im.spheres), ml = mask(im.liquid);
+    const interior = new Uint8Array(N);
+    for (let y = 2; y < H - 2; ++y) for (let x = 2; x < W - 2; ++x) {
+      let all = 1;
+      for (let dy = -2; dy <= 2 && all; ++dy) for (let dx = -2; dx <= 2; ++dx) {
+        const j = (y + dy) * W + x + dx;
+        if (!(ms[j] && ml[j])) { all = 0; break; }
+      }
+      interior[y * W + x] = all;
+    }
+    const rough = (a) => {
+      let s = 0, n = 0;
+      for (let i = 0; i < N; ++i) if (interior[i]) {
+        s += Math.abs(4 * lum(a, i) - lum(a, i - 1) - lum(a, i + 1) - lum(a, i - W) - lum(a, i + W));
+        n += 1;
+      }
+      return n ? s / n : NaN;
+    };
+    // The background's own change, where neither look covers anything.
+    let bgShift = 0, nb = 0;
+    for (let i = 0; i < N; ++i) if (!ms[i] && !ml[i]) bgShift += lum(im.bgBright, i) - lum(im.bg, i), nb += 1;
+    bgShift /= Math.max(1, nb);
+    const through = (dark, bright) => {
+      let s = 0, n = 0;
+      for (let i = 0; i < N; ++i) if (interior[i]) s += lum(bright, i) - lum(dark, i), n += 1;
+      return n ? s / n / bgShift : NaN;
+    };
+    return { width: W, height: H, interior: count(interior), bgShift,
+             spheres: { coverage: count(ms), holes: holes(ms), roughness: rough(im.spheres), seeThrough: through(im.spheres, im.spheresBright) },
+             liquid: { coverage: count(ml), holes: holes(ml), roughness: rough(im.liquid), seeThrough: through(im.liquid, im.liquidBright) } };
+  }, b64);
+}
+
+// Sampled particles, drawn between the frames they interpolate: `rounds` samples at random moments, 32 particles each.
+async function sampleInterpolation(page, rounds, gapMs) {
+  const samples = [];
+  for (let k = 0; k < rounds; ++k) {
+    await sleep(gapMs * (0.5 + Math.random()));
+    const s = await page.evaluate(() => {
+      const n = window.__ff.frame?.count ?? 0;
+      const ids = Array.from({ length: 32 }, (_, j) => Math.floor(((j + Math.random()) * n) / 32));
+      return window.__ff.sampleInterpolation(ids);
+    });
+    if (s) samples.push(s);
+  }
+  let between = 0, total = 0, inner = 0, behind = 0, far = 0, pairs = 0, worst = 0, extent = 0;
+  for (const s of samples) {
+    if (s.alpha > 0.02 && s.alpha < 0.98 && !s.single) inner += 1;
+    // At most one frame behind: the pair is (the frame received before the newest, the newest).
+    if (s.b.frame !== s.newest || (!s.single && s.a.frame !== s.previous)) behind += 1;
+    const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    for (const p of s.samples) for (let a = 0; a < 3; ++a) lo[a] = Math.min(lo[a], p.newer[a]), hi[a] = Math.max(hi[a], p.newer[a]);
+    const ext = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    extent = Math.max(extent, ext);
+    for (const p of s.samples) {
+      total += 1;
+      let ok = true;
+      for (let a = 0; a < 3; ++a) {
+        const l = Math.min(p.older[a], p.newer[a]), h = Math.max(p.older[a], p.newer[a]), tol = 1e-6 * (1 + Math.abs(h));
+        const want = p.older[a] + s.alpha * (p.newer[a] - p.older[a]);
+        worst = Math.max(worst, Math.abs(p.drawn[a] - want));
+        if (!(p.drawn[a] >= l - tol && p.drawn[a] <= h + tol) || Math.abs(p.drawn[a] - want) > 1e-5 * (1 + Math.abs(want))) ok = false;
+      }
+      if (ok) between += 1;
+      if (!s.single) {
+        pairs += 1;
+        // A particle that moves more than a tenth of the fluid's extent in one frame: the two frames' orders differ.
+        if (Math.hypot(p.newer[0] - p.older[0], p.newer[1] - p.older[1], p.newer[2] - p.older[2]) > 0.1 * ext) far += 1;
+      }
+    }
+  }
+  return { rounds: samples.length, total, between, inner, behind, worst, far, pairs, farFraction: pairs ? far / pairs : NaN,
+           alphas: samples.map((s) => Number(s.alpha.toFixed(2))) };
+}
+
+// Main-thread time over `ms` of wall time: chromium's own task time for the page's main thread (CDP Performance
+// metrics) and the viewer's counters, per drawn and per received frame.
+async function mainThreadTime(page, cdp, ms) {
+  const read = async () => {
+    const { metrics } = await cdp.send('Performance.getMetrics');
+    const m = Object.fromEntries(metrics.map((x) => [x.name, x.value]));
+    const s = await page.evaluate(() => ({ drawn: window.__ff.renderedFrames, recv: window.__ff.framesReceived, ...window.__ff.main }));
+    return { ...s, task: m.TaskDuration * 1000, script: m.ScriptDuration * 1000 };
+  };
+  const a = await read();
+  await sleep(ms);
+  const b = await read();
+  const drawn = Math.max(1, b.drawn - a.drawn), recv = Math.max(1, b.recv - a.recv);
+  return { drawn, recv, taskMsPerDraw: (b.task - a.task) / drawn, scriptMsPerDraw: (b.script - a.script) / drawn,
+           frameHandlingMsPerFrame: (b.ingestMs - a.ingestMs + b.decodeMs - a.decodeMs) / recv,
+           mainDecodeMsPerFrame: (b.decodeMs - a.decodeMs) / recv, workerDecodeMsPerFrame: (b.workerDecodeMs - a.workerDecodeMs) / recv,
+           renderLoopMsPerDraw: (b.renderMs - a.renderMs) / drawn };
+}
+
+// Hides the HUD, the panel and the XR buttons (the looks' screenshots compare the canvas alone), or shows them again.
+const chrome = (page, visible) => page.evaluate((v) => {
+  for (const id of ['hud', 'panel', 'xr-buttons']) document.getElementById(id).style.visibility = v ? '' : 'hidden';
+}, visible);
+// Waits until the page has drawn `n` more frames.
+// (A held page draws only when something changed: each round asks for one.)
+const drawn = async (page, n = 2) => {
+  for (let k = 0; k < n; ++k) {
+    const f0 = await page.evaluate(() => (window.__ff.redraw(), window.__ff.renderedFrames));
+    await page.waitForFunction((f) => window.__ff.renderedFrames > f, f0, { timeout: 60_000, polling: 50 });
+  }
+  await sleep(100);
+};
+
 const summary = {};
 const browser = await chromium.launch({ executablePath: browserPath, headless: true, args: CHROMIUM_ARGS });
 try {
   // ---- live ---------------------------------------------------------------------------------------------------
-  const extra = [...(args.cache ? ['--cache', args.cache] : []), ...(args.mesh ? ['--mesh', args.mesh] : [])];
+  // --max-fps 10: the simulation slower than the display on purpose (the viewer must not wait for it).
+  const extra = [...(args.cache ? ['--cache', args.cache] : []), ...(args.mesh ? ['--mesh', args.mesh] : []), '--max-fps', '10'];
   const server = await startServer(sceneFile, extra);
   console.log(`[${elapsed()} s] serving ${server.url}`);
   try {
@@ -186,23 +379,90 @@ try {
     console.log(`speed while pouring and forming (10k bunny; 60 steps/s is real time): simulation ${speed.sim.toFixed(1)} steps/s, ` +
                 `received ${speed.recv.toFixed(1)} frames/s, render ${speed.render.toFixed(1)} fps`);
     check(Number.isFinite(Number(hudFps)) && Number.isFinite(Number(hudStep)), 'HUD shows FPS and step time');
-    // The page draws on demand (a new frame, a camera move, a drag); the render rate the browser can sustain is
-    // measured by drawing every display frame for 2 s.
-    const drawRate = (continuous) => page.evaluate(async (c) => {
-      const s = window.__ff;
-      s.continuous = c;
-      await new Promise((r) => setTimeout(r, 300));
-      const f0 = s.renderedFrames, w0 = performance.now();
-      await new Promise((r) => setTimeout(r, 2000));
-      const rate = ((s.renderedFrames - f0) * 1000) / (performance.now() - w0);
-      s.continuous = false;
-      return rate;
-    }, continuous);
-    summary.render_fps_continuous = await drawRate(true);
-    summary.draws_per_s_on_demand = await drawRate(false);
-    console.log(`render: ${summary.render_fps_continuous.toFixed(1)} fps drawing every display frame (headless chromium, ` +
-                `SwiftShader); on demand ${summary.draws_per_s_on_demand.toFixed(1)} draws/s`);
-    check(summary.render_fps_continuous > 0 && summary.draws_per_s_on_demand > 0, 'the page draws (continuously and on demand)');
+    // The look, chosen by measured frame time: liquid if it holds the display rate, else the fall back to spheres.
+    await waitFor(page, () => Number.isFinite(window.__ff.look.liquidFrameMs) || window.__ff.look.fellBack, null, 60_000,
+                  'the liquid look measured its frame time');
+    const look = await page.evaluate(() => window.__ff.look);
+    summary.look = look;
+    const cannotHold = look.liquidFrameMs > 1.25 * look.displayMs + 2;
+    console.log(`look: liquid drew a frame every ${look.liquidFrameMs?.toFixed(1)} ms (its targets at ${look.liquidScale}× ` +
+                `resolution), the display's period ${look.displayMs?.toFixed(1)} ms: ${look.mode}` +
+                `${look.fellBack ? ` (fell back: ${look.reason})` : ''} [${await page.evaluate(() => window.__ff.gpu)}]`);
+    check(look.auto && Number.isFinite(look.liquidFrameMs) && (cannotHold ? look.mode === 'spheres' && look.fellBack : look.mode === 'liquid'),
+          `the look follows the measured frame time (${look.mode})`);
+
+    // Drawing at the display's rate, not the simulation's: frames drawn per frame received, over 5 s.
+    const rates = await page.evaluate(async () => {
+      const s = window.__ff, d0 = s.renderedFrames, r0 = s.framesReceived, w0 = performance.now();
+      await new Promise((r) => setTimeout(r, 5000));
+      const secs = (performance.now() - w0) / 1000;
+      return { drawn: s.renderedFrames - d0, received: s.framesReceived - r0, secs, look: s.look.mode };
+    });
+    summary.render_fps_continuous = rates.drawn / rates.secs;
+    summary.draws_per_frame_received = rates.drawn / Math.max(1, rates.received);
+    console.log(`render: ${summary.render_fps_continuous.toFixed(1)} draws/s (${rates.look}; headless chromium, SwiftShader), ` +
+                `${(rates.received / rates.secs).toFixed(1)} frames received/s (serve --max-fps 10): ` +
+                `${summary.draws_per_frame_received.toFixed(2)} draws per frame received`);
+    check(rates.received > 0 && rates.drawn >= 2.5 * rates.received,
+          `the viewer draws at least 2.5× as many frames as it receives (${rates.drawn} drawn, ${rates.received} received in ${rates.secs.toFixed(1)} s)`);
+
+    // Interpolation, read back from the GPU on sampled particles.
+    const interp = await sampleInterpolation(page, 16, 180);
+    summary.interpolation = interp;
+    console.log(`interpolation: ${interp.rounds} samples × 32 particles, alphas ${interp.alphas.join(' ')}; ` +
+                `largest miss of the drawn position ${interp.worst.toExponential(1)} m`);
+    check(interp.rounds >= 10 && interp.between === interp.total,
+          `drawn positions lie between the two frames they interpolate (${interp.between} of ${interp.total} sampled particles)`);
+    check(interp.behind === 0, `never more than one frame behind: each sample's pair is (the previous frame, the newest) ` +
+                               `(${interp.behind} of ${interp.rounds} otherwise)`);
+    check(interp.inner >= 0.3 * interp.rounds, `drawn in between, not at the frames: ${interp.inner} of ${interp.rounds} samples ` +
+                                               `with 0.02 < alpha < 0.98`);
+    // The particles' order between frames: the live server sends them in the solver's (cell-sorted) order.
+    console.log(`particle order between live frames: ${(100 * interp.farFraction).toFixed(1)} % of the sampled particles moved ` +
+                `more than a tenth of the fluid's extent between the two frames of a pair`);
+
+    // Frames as compact as before: 16-bit positions and a target byte per particle.
+    const wire = await page.evaluate(() => ({ bytes: window.__ff.bytesReceived, particles: window.__ff.particlesReceived,
+                                              frames: window.__ff.framesReceived }));
+    summary.bytes_per_particle = wire.bytes / wire.particles;
+    check(summary.bytes_per_particle > 6.9 && summary.bytes_per_particle < 7.1,
+          `${summary.bytes_per_particle.toFixed(3)} bytes per particle on the WebSocket (${wire.frames} frames, ${(wire.bytes / 1e6).toFixed(1)} MB)`);
+
+    // Main-thread time per drawn frame: this page (frames from the Worker), then the old path (WebSocket and decoding on
+    // the main thread, ?decode=main) in a page of its own, in the same look, while this one stands still.
+    {
+      const cdp = await page.context().newCDPSession(page);
+      await cdp.send('Performance.enable');
+      const worker = await mainThreadTime(page, cdp, 4000);
+      await page.evaluate(() => window.__ff.suspend(true));
+      const oldPage = await browser.newPage({ viewport: { width: 640, height: 400 } });
+      oldPage.on('pageerror', (e) => pageErrors.push(`old path: ${e}`));
+      await oldPage.goto(`${server.url}?decode=main&look=${look.mode}`);
+      await waitFor(oldPage, () => window.__ff?.framesReceived >= 8, null, 60_000, 'old path: frames');
+      await sleep(1500);
+      const ocdp = await oldPage.context().newCDPSession(oldPage);
+      await ocdp.send('Performance.enable');
+      const old = await mainThreadTime(oldPage, ocdp, 4000);
+      const oldDecode = await oldPage.evaluate(() => window.__ff.decode);
+      await oldPage.close();
+      await page.evaluate(() => window.__ff.suspend(false));
+      summary.main_thread = { worker, old };
+      const f = (x) => x.toFixed(2);
+      console.log(`main thread per drawn frame (${look.mode}): with the Worker ${f(worker.taskMsPerDraw)} ms of tasks ` +
+                  `(${f(worker.scriptMsPerDraw)} ms script; render loop ${f(worker.renderLoopMsPerDraw)} ms), old path ` +
+                  `${f(old.taskMsPerDraw)} ms (${f(old.scriptMsPerDraw)} ms script; render loop ${f(old.renderLoopMsPerDraw)} ms); ` +
+                  `per received frame the main thread spends ${f(worker.frameHandlingMsPerFrame)} ms with the Worker ` +
+                  `(which decodes in ${f(worker.workerDecodeMsPerFrame)} ms), ${f(old.frameHandlingMsPerFrame)} ms on the old path ` +
+                  `(decoding ${f(old.mainDecodeMsPerFrame)} ms)`);
+      // Sub-millisecond times on two loaded cores are noise-bound (the same render loop reads differently in the two
+      // pages): the check is where the decoding runs; the times are printed.
+      check(oldDecode === 'main' && worker.mainDecodeMsPerFrame === 0 && worker.workerDecodeMsPerFrame > 0 &&
+            old.mainDecodeMsPerFrame > 0,
+            `frames are decoded in the Worker (${f(worker.workerDecodeMsPerFrame)} ms a frame there, none on the main thread; ` +
+            `the old path decodes on the main thread, ${f(old.mainDecodeMsPerFrame)} ms a frame)`);
+      await cdp.detach();
+    }
+
     // Without a WebXR device the VR and AR buttons say so (and nothing breaks); the XR part below emulates one.
     const xrButtons = await page.evaluate(() => [...document.querySelectorAll('#xr-buttons button')].map((b) => b.textContent));
     check(xrButtons.length === 2 && xrButtons.every((t) => /NOT SUPPORTED/.test(t)),
@@ -261,6 +521,62 @@ try {
     if (await waitFor(page, () => window.__ff.frame?.errorRate < 4, null, 120_000, 'formed before the drag (E < 4 %)')) {
       const formed = await page.evaluate(() => window.__ff.frame);
       console.log(`[${elapsed()} s] formed: E = ${formed.errorRate.toFixed(2)} % at t = ${formed.time.toFixed(2)} s`);
+
+      // The three looks on one held frame of the formed bunny, the canvas alone; the background changed for the
+      // see-through check. PNGs in --out.
+      {
+        const shots = {};
+        await chrome(page, false);
+        await page.evaluate(() => window.__ff.hold(true));
+        const shoot = async (lookName, key, file) => {
+          await page.evaluate((l) => window.__ff.setLook(l), lookName);
+          await drawn(page, 2);
+          shots[key] = await page.screenshot(file ? { path: path.join(outDir, file) } : {});
+        };
+        await shoot('none', 'bg', 'look-background.png');
+        await shoot('spheres', 'spheres', 'look-spheres.png');
+        await shoot('liquid', 'liquid', 'look-liquid.png');
+        await page.evaluate(() => window.__ff.setBackground(0x8a9bb0));
+        await shoot('none', 'bgBright');
+        await shoot('spheres', 'spheresBright');
+        await shoot('liquid', 'liquidBright', 'look-liquid-light-background.png');
+        await page.evaluate(() => window.__ff.setBackground(0x111418));
+        const m = await lookMetrics(page, shots);
+        summary.looks = m;
+        const L = m.liquid, S = m.spheres;
+        console.log(`looks on one frame (${m.width}×${m.height}): coverage liquid ${L.coverage} px, spheres ${S.coverage} px ` +
+                    `(${(L.coverage / S.coverage).toFixed(2)}×); roughness (mean |Laplacian| of luminance inside) liquid ` +
+                    `${L.roughness.toFixed(2)}, spheres ${S.roughness.toFixed(2)} (${(L.roughness / S.roughness).toFixed(2)}×); ` +
+                    `holes liquid ${L.holes} px, spheres ${S.holes} px; see-through liquid ${L.seeThrough.toFixed(3)}, ` +
+                    `spheres ${S.seeThrough.toFixed(3)} of the background's change`);
+        check(m.interior > 2000 && L.roughness < 0.6 * S.roughness,
+              `liquid: one smooth surface (roughness ${L.roughness.toFixed(2)} against the spheres' ${S.roughness.toFixed(2)})`);
+        check(L.coverage > 0.85 * S.coverage && L.coverage < 1.5 * S.coverage && L.holes <= Math.max(50, 0.5 * S.holes),
+              `liquid: the spheres' silhouette without their gaps (coverage ${(L.coverage / S.coverage).toFixed(2)}× theirs, ` +
+              `holes ${L.holes} px against ${S.holes})`);
+        check(L.seeThrough > 0.08 && L.seeThrough > S.seeThrough + 0.05,
+              `liquid: the background is visible through it (${(100 * L.seeThrough).toFixed(1)} % of its change shows, ` +
+              `${(100 * S.seeThrough).toFixed(1)} % through the spheres)`);
+        // The mesh look: the live surface (the server reconstructs it while the look shows it).
+        const s0 = await page.evaluate(() => window.__ff.surface.received);
+        const input = (id, v) => page.evaluate(([i, x]) => {  // the panel is hidden: set the control and tell the page
+          const e = document.getElementById(i);
+          if (e.type === 'checkbox') e.checked = x; else e.value = x;
+          e.dispatchEvent(new Event('change'));
+        }, [id, v]);
+        await input('sel-look', 'mesh');
+        if (await waitFor(page, (n) => window.__ff.surface.received > n, s0, 30_000, 'mesh look: a live surface')) {
+          await drawn(page, 2);
+          const meshShot = await page.screenshot({ path: path.join(outDir, 'look-mesh.png') });
+          const mpx = await colouredPixels(page, meshShot);
+          check(mpx.coloured > 0.5 * S.coverage, `mesh look: the live surface drawn (${mpx.coloured} coloured pixels)`);
+        }
+        await input('chk-mesh', false);
+        await page.evaluate((l) => window.__ff.setLook(l), look.mode);
+        await page.evaluate(() => window.__ff.hold(false));
+        await chrome(page, true);
+        console.log(`[${elapsed()} s] looks saved: ${['look-liquid.png', 'look-spheres.png', 'look-mesh.png'].map((f) => path.join(outDir, f)).join(' ')}`);
+      }
       const from = await page.evaluate(() => window.__ff.targetScreen(0));
       const to = await page.evaluate(() => {
         const h = window.__ff.hello.targets[0];
@@ -275,6 +591,14 @@ try {
         await sleep(30);
       }
       await page.mouse.up();
+      const dragDraw = await page.evaluate(() => window.__ff.drag);
+      const lag = [...dragDraw.lagMs].sort((x, y) => x - y);
+      summary.drag_draw = { moves: dragDraw.moves, checked: dragDraw.checked, drawn_next: dragDraw.drawnNext,
+                            median_lag_ms: lag[lag.length >> 1] };
+      check(dragDraw.checked >= 3 && dragDraw.drawnNext === dragDraw.checked,
+            `the dragged box is drawn where the pointer put it in the next display frame (${dragDraw.drawnNext} of ` +
+            `${dragDraw.checked} draws after ${dragDraw.moves} pointer moves; median ${lag[lag.length >> 1]?.toFixed(0)} ms from ` +
+            `the event to the draw), before the server answers`);
       if (await waitFor(page, (n) => window.__ff.poseAcks > n && window.__ff.poses[0] &&
                           Math.hypot(...window.__ff.poses[0].translate) > 0.01, acks, 10_000, 'the server reports the new transform')) {
         await sleep(300);  // the last pose of the drag
@@ -294,13 +618,24 @@ try {
         const last = afterMove.at(-1);
         const peak = Math.max(...afterMove.map((h) => h.error));
         const firstUnder = afterMove.find((h) => h.error < 4);
+        // The issue's 1 % within 0.5 simulated s: the first frame under 1 %, and from when on it stays under.
+        const firstUnder1 = afterMove.find((h) => h.error < 1);
+        const lastOver1 = afterMove.filter((h) => h.error >= 1).at(-1);
+        const settled1 = lastOver1 ? afterMove.find((h) => h.time > lastOver1.time) : afterMove[0];
         // The formed shape went where the target went: its centroid moved by the target's translation. With that,
         // an E under 4 % can only be E against the moved target (against the old place it would be ~ the move).
         const shift = last.centroid.map((v, a) => v - formed.centroid[a]);
         const miss = Math.hypot(...shift.map((v, a) => v - pose.translate[a]));
         summary.edit = { moved_m: Math.hypot(...pose.translate), centroid_shift_m: Math.hypot(...shift), centroid_miss_m: miss,
                          peak_error_pct: peak, error_when_followed_pct: last.error, followed_after_s: last.time - tMove,
-                         first_under_4pct_after_s: firstUnder ? firstUnder.time - tMove : null };
+                         first_under_4pct_after_s: firstUnder ? firstUnder.time - tMove : null,
+                         first_under_1pct_after_s: firstUnder1 ? firstUnder1.time - tMove : null,
+                         under_1pct_from_s: settled1 ? settled1.time - tMove : null,
+                         error_at_0_5s_pct: afterMove.find((h) => h.time >= tMove + 0.5)?.error ?? null };
+        const fs1 = (v) => (v === null || v === undefined ? 'not within the window' : `${v.toFixed(2)} s`);
+        console.log(`edit: E under 1 % first at ${fs1(summary.edit.first_under_1pct_after_s)}, and stays under from ` +
+                    `${fs1(summary.edit.under_1pct_from_s)} after the move; E at 0.5 s: ` +
+                    `${summary.edit.error_at_0_5s_pct?.toFixed(2) ?? '–'} % (the issue asks < 1 % within 0.5 simulated s)`);
         console.log(`edit: after the move E peaked at ${peak.toFixed(2)} %, was ${last.error.toFixed(2)} % at ` +
                     `${(last.time - tMove).toFixed(2)} simulated s; the fluid's centroid moved ${Math.hypot(...shift).toFixed(3)} m ` +
                     `(${miss.toFixed(3)} m from the target's translation)`);
@@ -376,11 +711,13 @@ try {
       await xrPage.addInitScript({ path: path.join(path.dirname(new URL(import.meta.url).pathname), '..', '..',
                                                    'node_modules', 'iwer', 'build', 'iwer.min.js') });
       await xrPage.addInitScript(() => {
-        const d = new IWER.XRDevice(IWER.metaQuest3);
+        // Stereo: two eyes side by side in the canvas (IWER's default is one view).
+        const d = new IWER.XRDevice(IWER.metaQuest3, { stereoEnabled: true });
         d.installRuntime({ forceInstall: true });
         window.__xrDevice = d;
       });
-      await xrPage.goto(server.url);
+      // The liquid in both eyes whatever this machine's frame time (?look= turns the fall back off).
+      await xrPage.goto(`${server.url}?look=liquid`);
       await waitFor(xrPage, () => window.__ff?.framesReceived >= 3 && window.__ff.hello, null, 30_000, 'XR page connected');
       const labels = await xrPage.evaluate(() => [...document.querySelectorAll('#xr-buttons button')].map((b) => b.textContent));
       check(labels[0] === 'ENTER VR' && labels[1] === 'START AR', `with an (emulated) headset the buttons offer VR and AR: ${labels.join(', ')}`);
@@ -390,7 +727,37 @@ try {
       if (inVr) {
         const xr = await xrPage.evaluate(() => window.__ff.xr);
         check(xr.mode === 'immersive-vr', `entered ${xr.mode}; the XR loop drew ${xr.renderedFrames} frames`);
-        await xrPage.screenshot({ path: path.join(outDir, 'vr.png') });
+        const vrShot = await xrPage.screenshot({ path: path.join(outDir, 'vr.png') });
+        // The frame rate: the highest the session supports, asked for and granted.
+        await waitFor(xrPage, () => window.__ff.xr.frameRate === window.__ff.xr.frameRateRequested, null, 5_000, 'XR frame rate');
+        const rate = await xrPage.evaluate(() => window.__ff.xr);
+        check(rate.supportedFrameRates && rate.frameRateRequested === Math.max(...rate.supportedFrameRates) &&
+              rate.frameRate === rate.frameRateRequested,
+              `XR: the highest frame rate requested (${rate.frameRateRequested} Hz of ${rate.supportedFrameRates?.join(', ')}; ` +
+              `the session runs at ${rate.frameRate} Hz)`);
+        // Both eyes draw the liquid: its smoothed depth holds liquid in each eye's viewport, and each half of the
+        // canvas shows it.
+        const cov = await xrPage.evaluate(() => ({ look: window.__ff.look.mode, ...window.__ff.liquidCoverage() }));
+        const halves = await xrPage.evaluate(async (b64) => {
+          const img = new Image();
+          img.src = `data:image/png;base64,${b64}`;
+          await img.decode();
+          const c = document.createElement('canvas');
+          c.width = img.width;
+          c.height = img.height;
+          const g = c.getContext('2d');
+          g.drawImage(img, 0, 0);
+          const d = g.getImageData(0, 0, c.width, c.height).data, n = [0, 0];
+          for (let i = 0; i < d.length; i += 4) {
+            const r = d[i], gg = d[i + 1], b = d[i + 2];
+            if (Math.max(r, gg, b) - Math.min(r, gg, b) > 40 && Math.max(r, gg, b) > 60) n[((i / 4) % c.width) < c.width / 2 ? 0 : 1] += 1;
+          }
+          return n;
+        }, vrShot.toString('base64'));
+        summary.xr_liquid = { viewports: cov.viewports, liquid_pixels: cov.pixels, coloured_halves: halves };
+        check(cov.look === 'liquid' && cov.viewports.length === 2 && cov.pixels.every((n) => n > 300) && halves.every((n) => n > 300),
+              `XR: both eyes draw the liquid (viewports ${cov.viewports.map((v) => v.join('/')).join(' and ')}: ${cov.pixels.join(' and ')} ` +
+              `liquid pixels; ${halves.join(' and ')} coloured pixels in the two halves of the canvas)`);
         // Aim the right controller at the target from 1.2 m away, hold the trigger, sweep sideways, release.
         const aim = (dx) => xrPage.evaluate((off) => {
           const ctl = window.__xrDevice.controllers.right, t = window.__ff.targetWorld(0);
@@ -452,7 +819,7 @@ try {
 
   // ---- playback -----------------------------------------------------------------------------------------------
   if (args.playback) {
-    const pb = await startServer(args.playback);
+    const pb = await startServer(args.playback, ['--max-fps', '10']);
     console.log(`[${elapsed()} s] playback: serving ${pb.url}`);
     try {
       const page = await browser.newPage({ viewport: { width: 800, height: 500 } });
@@ -471,6 +838,24 @@ try {
         const a2 = await page.evaluate(() => ({ time: window.__ff.animation.time, frames: window.__ff.framesReceived }));
         check(advanced, `playback: the animation advances with the frames (t ${a1.time.toFixed(3)} -> ${a2.time.toFixed(3)} s, ` +
                         `${a2.frames - f1} frames)`);
+        // Interpolated like the live frames; the mesh animation follows the drawn time, between the frames' times.
+        const pi = await sampleInterpolation(page, 12, 150);
+        const animTimes = [];
+        for (let k = 0; k < 12; ++k) {
+          await sleep(60 + 60 * Math.random());
+          animTimes.push(await page.evaluate(() => [window.__ff.animation.time, window.__ff.frame.time, window.__ff.interp.time]));
+        }
+        const fps = await page.evaluate(() => window.__ff.hello.fps);
+        const inBetween = animTimes.filter(([a, , t]) => a === t && Math.abs(a * fps - Math.round(a * fps)) > 0.02).length;
+        summary.playback_interpolation = { ...pi, animation_in_between: inBetween };
+        check(pi.rounds >= 8 && pi.between === pi.total && pi.behind === 0 && pi.inner >= 0.3 * pi.rounds,
+              `playback: drawn positions between the two frames they interpolate (${pi.between} of ${pi.total}; ` +
+              `${pi.inner} of ${pi.rounds} samples in between)`);
+        check(inBetween >= 3, `playback: the mesh animation is drawn at the interpolated time (${inBetween} of ` +
+                              `${animTimes.length} samples between two frames' times)`);
+        check(pi.pairs > 0 && pi.farFraction < 0.02,
+              `playback: particles keep their order between frames (${(100 * pi.farFraction).toFixed(1)} % moved more than a ` +
+              `tenth of the fluid's extent in one frame)`);
         const shot = await page.screenshot({ path: path.join(outDir, 'playback.png') });
         const px = await colouredPixels(page, shot);
         check(px.coloured > 0.005 * px.total, `playback screenshot is not blank (${px.coloured} coloured pixels)`);
