@@ -8,7 +8,7 @@
 //                | {type: 'frame', frame, decodeMs} | {type: 'surface', surface, decodeMs}
 import { BufferPool, decodeMessage } from './frames.js';
 
-const pool = new BufferPool(6);
+const pool = new BufferPool(8);
 let ws = null, url = null;
 
 function connect() {

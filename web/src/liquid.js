@@ -6,8 +6,9 @@
 //   3. the particles again, additively → thickness, weighted by each target's colour (the liquid's tint)
 //   4. the depth smoothed by a separable bilateral filter (twice): the spheres' bumps go, the silhouettes and the
 //      depth steps between parts (an ear in front of the body) stay
-//   5. composite: normals from the smoothed depth, Fresnel reflection of an environment, refraction of pass 1,
-//      Beer–Lambert absorption through the thickness, tinted per target; the scene where there is no liquid
+//   5. the scene into the output as it is, then the liquid over it: normals from the smoothed depth, Fresnel
+//      reflection of an environment, refraction of pass 1, Beer–Lambert absorption through the thickness, tinted per
+//      target, the rim blended in
 // Every pass draws with the viewer's camera: in an XR session three.js makes that the headset's ArrayCamera and draws
 // each eye into its own viewport, so the liquid works in both eyes (the full-screen passes are clip-space quads that
 // fill whichever viewport they are drawn into, and read the eye's projection from three's per-eye uniforms).
@@ -138,7 +139,6 @@ const COMPOSITE_FRAGMENT = /* glsl */ `
 
   void main() {
     vec2 uv = gl_FragCoord.xy / uOutSize;
-    vec4 bg = texture2D(tScene, uv);
     float d = texture2D(tDepth, uv).r;
     // Just outside the liquid's (coarser) depth, a neighbour's depth: the silhouette then comes from the (filtered)
     // thickness below, smooth at any resolution of the liquid's targets.
@@ -150,11 +150,7 @@ const COMPOSITE_FRAGMENT = /* glsl */ `
       e = texture2D(tDepth, uv - vec2(0.0, uFluidTexel.y)).r; if (e > 0.0 && (d <= 0.0 || e < d)) d = e;
       if (d > 0.0 && texture2D(tThick, uv).a <= 0.0) d = 0.0;
     }
-    if (d <= 0.0 || d > sceneDepth(uv) + 1e-3) {
-      gl_FragColor = uTransparentBackground > 0.5 ? bg : vec4(bg.rgb, 1.0);
-      #include <colorspace_fragment>
-      return;
-    }
+    if (d <= 0.0 || d > sceneDepth(uv) + 1e-3) discard;  // the scene, drawn straight into the output, shows
     // ndc per uv (2 on the desktop, 4 across one eye of a side-by-side headset image).
     vec2 k = vec2(dFdx(vNdc.x) / dFdx(uv.x), dFdy(vNdc.y) / dFdy(uv.y));
     vec3 P = viewPos(vNdc, d);
@@ -196,10 +192,12 @@ const COMPOSITE_FRAGMENT = /* glsl */ `
     // The light's highlight (the environment's sun lobe is too small a target for a rippled surface alone).
     vec3 lv = normalize((viewMatrix * vec4(uLight, 0.0)).xyz);
     colour += vec3(1.0, 0.97, 0.92) * 0.9 * pow(max(dot(n, normalize(lv + V)), 0.0), 90.0);
-    // The rim, where the liquid is thinner than a particle, fades into the background.
+    // The rim, where the liquid is thinner than a particle, fades into the background (blended over the output).
     float rim = smoothstep(0.0, uEdge, thick);
-    colour = mix(bg.rgb, colour, rim);
-    gl_FragColor = vec4(colour, uTransparentBackground > 0.5 ? max(bg.a, rim * (1.0 - dot(transmit, vec3(0.333)) + fresnel)) : 1.0);
+    // AR: no background to refract, the passthrough shows through as much as the liquid transmits.
+    float a = uTransparentBackground > 0.5 ? rim * clamp(1.0 - dot(transmit, vec3(0.333)) + fresnel, 0.0, 1.0) : rim;
+    if (uTransparentBackground > 0.5) colour = scatter + environment(rw) * fresnel;
+    gl_FragColor = vec4(colour, a);
     #include <colorspace_fragment>
   }`;
 
@@ -260,7 +258,7 @@ export class LiquidRenderer {
     this.compositeScene = quadScene(new THREE.ShaderMaterial({ uniforms: this.compositeUniforms,
                                                                vertexShader: QUAD_VERTEX,
                                                                fragmentShader: COMPOSITE_FRAGMENT, depthTest: false,
-                                                               depthWrite: false }));
+                                                               depthWrite: false, transparent: true }));
     this.targets = null;
     this.savedViewports = [new THREE.Vector4(), new THREE.Vector4()];
     this.clearColour = new THREE.Color();
@@ -359,7 +357,9 @@ export class LiquidRenderer {
     this.scaleEyeViewports(false);
     r.setClearColor(this.clearColour, clearAlpha);
 
-    // 5. composite into the output
+    // 5. the scene straight into the output (exactly as without the liquid where there is none), then the liquid over it
+    r.setRenderTarget(out);
+    r.render(scene, camera);
     const c = this.compositeUniforms;
     c.tDepth.value = src.texture;
     c.tThick.value = t.thick.texture;
@@ -368,8 +368,10 @@ export class LiquidRenderer {
     c.uOutSize.value.set(w, h);
     c.uFluidTexel.value.set(1 / this.fluidSize.x, 1 / this.fluidSize.y);
     c.uTransparentBackground.value = transparent ? 1 : 0;
-    r.setRenderTarget(out);
+    const autoClear = r.autoClear;
+    r.autoClear = false;
     r.render(this.compositeScene, camera);
+    r.autoClear = autoClear;
     this.stats.frames += 1;
   }
 

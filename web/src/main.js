@@ -434,8 +434,8 @@ renderer.xr.addEventListener('sessionend', () => {
 
 // Frame time, for the automatic fall back from liquid to spheres. The display's frame period: in XR the session's
 // frame rate; on the desktop measured at start, over display frames in which nothing is drawn. Then the median
-// period between consecutive drawn frames in liquid mode, after a second to settle (shaders compile, targets are
-// made): more than 1.25 periods (and 2 ms) is a display rate it cannot hold.
+// period between consecutive drawn frames in liquid mode over 30 frames (8 when far too slow), after a second to
+// settle (shaders compile, targets are made): more than 1.25 periods (and 2 ms) is a display rate it cannot hold.
 const perf = {
   calib: new Float32Array(30), nCalib: 0, displayMs: NaN,
   deltas: new Float32Array(30), n: 0, since: 0, last: -1, lastDrew: false,
@@ -466,8 +466,10 @@ function frameTiming(now, drew) {
   if (drew && perf.lastDrew && Number.isFinite(delta) && now - perf.since > 1000 && perf.n < perf.deltas.length)
     perf.deltas[perf.n++] = delta;
   perf.lastDrew = drew;
-  if (perf.n < perf.deltas.length) return;
-  const ms = perf.median(perf.deltas, perf.n), display = perf.display();
+  // 30 frames decide; 8 already do when they are far too slow (over 3 periods: no point watching it crawl longer).
+  const display = perf.display();
+  if (perf.n < perf.deltas.length && !(perf.n >= 8 && perf.median(perf.deltas, perf.n) > 3 * display)) return;
+  const ms = perf.median(perf.deltas, perf.n);
   perf.n = 0;
   perf.since = now;
   if (state.look.mode !== 'liquid') return;

@@ -14,7 +14,7 @@ export function createFrameSource(h) {
 
 function workerSource(h) {
   const worker = new Worker(new URL('./frame_worker.js', import.meta.url), { type: 'module' });
-  const handed = [];  // reused: one array for the recycle messages' buffer lists
+  const handed = [];  // buffers to hand back (one array, reused)
   worker.onmessage = (ev) => {
     const m = ev.data;
     switch (m.type) {
@@ -31,10 +31,13 @@ function workerSource(h) {
   return {
     kind: 'worker',
     send: (text) => worker.postMessage({ type: 'send', text }),
+    // Back to the Worker's pool in batches of three frames: a message per frame costs the main thread more than it
+    // saves the Worker.
     recycle: (frame) => {
-      handed.length = 0;
       handed.push(frame.positions.buffer, frame.targets.buffer);
+      if (handed.length < 6) return;
       worker.postMessage({ type: 'recycle', buffers: handed }, handed);
+      handed.length = 0;
     },
   };
 }
