@@ -8,7 +8,7 @@
 // `fluidform compare bench/scenes/NAME.json` works by hand). --quick runs the same scenes from copies in the work
 // folder with ~2k control particles (1.2k per target with several) and 150 frames. Output: DIR/table3.md and DIR/table3.csv, and
 // each scene's compare folder DIR/NAME/ (DIR: --keep, else a fresh temporary folder, kept and printed).
-#include "app/compare.h"
+#include "pipeline/compare.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
 
@@ -165,7 +165,7 @@ std::string read_text(const fs::path& p) {
 
 struct SceneResult {
   std::string name;
-  std::optional<app::CompareTable> table;
+  std::optional<pipeline::CompareTable> table;
   std::string failure;  // when compare itself did not produce a table
   double wall_seconds = 0;
 };
@@ -177,21 +177,21 @@ SceneResult run_scene(const Args& a, const std::string& name, const fs::path& sc
   if (!a.frames.empty()) argv.insert(argv.end(), {"--frames", a.frames});
   const auto start = std::chrono::steady_clock::now();
   // The scene's own table (compare's stdout) goes to stderr with its progress: stdout keeps only the final table.
-  auto exit = app::run_child(argv, {}, {}, /*stdout_to_stderr=*/true);
+  auto exit = pipeline::run_child(argv, {}, {}, /*stdout_to_stderr=*/true);
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!exit || !exit->ok()) {
     r.failure = exit ? "compare: " + exit->describe() : exit.error().message;
     return r;
   }
-  auto table = app::table_from_json(read_json(dir / name / "table.json"));
+  auto table = pipeline::table_from_json(read_json(dir / name / "table.json"));
   if (table) r.table = std::move(*table);
   else r.failure = "compare: no table.json";
   return r;
 }
 
 std::string combined_markdown(const std::vector<SceneResult>& results, const Args& a, double total_seconds) {
-  const auto cols = app::markdown_columns();
-  std::string threads = "?", cpu = app::cpu_model();
+  const auto cols = pipeline::markdown_columns();
+  std::string threads = "?", cpu = pipeline::cpu_model();
   for (const auto& r : results)
     if (r.table) threads = std::to_string(r.table->threads);
   std::string s = fmt::format("# Table 3 (fluidform, {} mode), {:%Y-%m-%d}: {} threads, {}\n\n", a.quick ? "quick" : "full",
@@ -209,7 +209,7 @@ std::string combined_markdown(const std::vector<SceneResult>& results, const Arg
     }
     for (const auto& row : r.table->rows) {
       const std::string particles = std::isfinite(row.particles) ? fmt::format("{:.0f}", row.particles) : "n/a";
-      s += fmt::format("| {} | {} | {} | {} |\n", r.name, particles, r.table->frames, fmt::join(app::markdown_cells(row), " | "));
+      s += fmt::format("| {} | {} | {} | {} |\n", r.name, particles, r.table->frames, fmt::join(pipeline::markdown_cells(row), " | "));
       any_approx = any_approx || row.approximation;
     }
   }

@@ -1,13 +1,14 @@
 // fluidform command line (DESIGN.md "The CLI and output contract").
 // Exit codes: 0 ok, 2 bad input or usage, 1 runtime failure. Errors are one line on stderr.
-#include "app/compare.h"
+#include "pipeline/compare.h"
 #include "app/progress_bar.h"
-#include "app/mesh_export.h"
-#include "app/run_pipeline.h"
+#include "pipeline/mesh_export.h"
+#include "pipeline/run.h"
 #include "control/registry.h"
 #include "io/atomic_file.h"
 #include "io/load_mesh.h"
-#include "io/scene.h"
+#include "io/particle_frames.h"
+#include "scene/scene.h"
 #include "sampling/control_io.h"
 #include "sampling/samplers.h"
 #include "server/serve.h"
@@ -47,12 +48,12 @@ fs::path default_scene() {
   return fs::path(FF_SOURCE_DIR) / "examples" / "default_scene.json";
 }
 
-int cmd_run(const fs::path& scene_file, const ff::app::RunOptions& opt) {
-  auto scene = ff::io::load_scene(scene_file);
+int cmd_run(const fs::path& scene_file, const ff::pipeline::RunOptions& opt) {
+  auto scene = ff::scene::load_scene(scene_file);
   if (!scene) return fail(scene.error());
   spdlog::info("scene {} -> {}", scene_file.string(), opt.out_dir.string());
   ff::app::ProgressBar bar(stderr);
-  auto sum = ff::app::run_scene(*scene, opt, bar);
+  auto sum = ff::pipeline::run_scene(*scene, opt, bar);
   if (!sum) return fail(sum.error());
   spdlog::info("done: {} particles, {} frames, {:.2f} ms per frame (simulation only), peak memory {:.0f} MiB -> {}",
                sum->particles, sum->frames_written, 1e3 * sum->mean_frame_seconds, sum->peak_memory_mib,
@@ -96,7 +97,7 @@ int cmd_sample(SampleOptions o) {
   if (o.drop_box.size() % 6 != 0)
     return fail(ff::param_error("--drop-box takes 6 numbers per box: min x y z, max x y z"));
   for (std::size_t i = 0; i < o.drop_box.size(); i += 6) {
-    ff::Aabb b;
+    ff::sampling::DropBox b;
     b.min = ff::Vec3f(o.drop_box[i], o.drop_box[i + 1], o.drop_box[i + 2]);
     b.max = ff::Vec3f(o.drop_box[i + 3], o.drop_box[i + 4], o.drop_box[i + 5]);
     o.params.sparse.drop_boxes.push_back(b);
@@ -120,7 +121,7 @@ int cmd_sample(SampleOptions o) {
 
 struct MeshCliOptions {
   fs::path input, out;
-  ff::app::MeshOptions mesh;
+  ff::pipeline::MeshOptions mesh;
   bool no_glb = false, no_pc2 = false, no_frames = false, final_only = false, no_quantize = false;
   std::string extraction = "mc";
 };
@@ -132,11 +133,11 @@ int cmd_mesh(MeshCliOptions o) {
   if (!extraction) return fail(ff::param_error("--extraction " + extraction.error().message));
   o.mesh.params.extraction = *extraction;
   if (auto st = o.mesh.validate(); !st.ok()) return fail(st.error());
-  auto frames = ff::app::particle_frames(o.input);
+  auto frames = ff::io::particle_frames(o.input);
   if (!frames) return fail(frames.error());
   spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());
   ff::app::ProgressBar bar(stderr);
-  auto sum = ff::app::export_meshes(*frames, o.out, o.mesh, bar);
+  auto sum = ff::pipeline::export_meshes(*frames, o.out, o.mesh, bar);
   if (!sum) return fail(sum.error());
   spdlog::info("mesh: {} frame(s) meshed in {:.2f} s at spacing {:.4g} m; final.obj: {} triangles, {} vertices ({} from "
                "marching {}), {}, genus {}, {} component(s) -> {}",
@@ -149,7 +150,7 @@ int cmd_mesh(MeshCliOptions o) {
 }
 
 struct CompareCliOptions {
-  ff::app::CompareOptions compare;
+  ff::pipeline::CompareOptions compare;
   std::string controllers;  // comma-separated; empty = every registered controller
   int frames = 0;
 };
@@ -157,14 +158,14 @@ struct CompareCliOptions {
 int cmd_compare(CompareCliOptions o) {
   // Every name is checked before anything runs or is written: a typo must not cost a long table.
   if (!o.controllers.empty()) {
-    auto names = ff::app::parse_controller_list(o.controllers);
+    auto names = ff::pipeline::parse_controller_list(o.controllers);
     if (!names) return fail(names.error());
     o.compare.controllers = std::move(*names);
   }
   if (o.frames > 0) o.compare.frames = o.frames;
-  auto table = ff::app::run_compare(o.compare);
+  auto table = ff::pipeline::run_compare(o.compare);
   if (!table) return fail(table.error());
-  fmt::print(stdout, "{}", ff::app::table_markdown(*table));
+  fmt::print(stdout, "{}", ff::pipeline::table_markdown(*table));
   spdlog::info("compare: {} and table.csv in {}", (o.compare.out_dir / "table.md").string(), o.compare.out_dir.string());
   return 0;
 }
@@ -202,7 +203,7 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global flags such as -q also work after the subcommand
 
   fs::path scene_file;
-  ff::app::RunOptions run_opt;
+  ff::pipeline::RunOptions run_opt;
   int frames = 0;
   auto* run = app.add_subcommand("run", "simulate a scene file into an output folder");
   run->add_option("scene", scene_file, "scene file (JSON)")->required();
@@ -265,9 +266,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   compare->add_option("--frames", cmp_opt.frames,
                       fmt::format("output frames per controller (default: the scene's output.frames, else {})",
-                                  ff::app::kDefaultCompareFrames))
+                                  ff::pipeline::kDefaultCompareFrames))
       ->check(CLI::Range(1, 10'000'000));
-  compare->footer(ff::app::controllers_help());
+  compare->footer(ff::pipeline::controllers_help());
 
   ServeCliOptions serve_opt;
   auto* serve = app.add_subcommand(
@@ -314,5 +315,5 @@ int main(int argc, char** argv) {
   if (*compare) return cmd_compare(std::move(cmp_opt));
   if (*serve) return cmd_serve(std::move(serve_opt));
   // No sub-command: the bundled default scene into ./fluidform-out.
-  return cmd_run(default_scene(), ff::app::RunOptions{});
+  return cmd_run(default_scene(), ff::pipeline::RunOptions{});
 }

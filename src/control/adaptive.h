@@ -106,4 +106,12 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   std::vector<NearestSeedField> seed_field_;  // per target
 };
 
+/// The controller table's factory (control/registry.h).
+inline Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                               const AdaptiveParams& params) {
+  auto c = AdaptiveController::create(std::move(targets), ctx, params);
+  if (!c) return c.error();
+  return std::unique_ptr<sim::Controller>(std::move(*c));
+}
+
 }  // namespace ff::control

@@ -3,7 +3,11 @@
 // Every component can be switched off or set to its literal paper reading, so its contribution can be
 // measured (issue 4's ablations). JSON keys in scene files ("controller": {"adaptive": {...}}) are the
 // field names; enums are strings.
+#include "control/controller_info.h"
 #include "core/error.h"
+#include "core/fields.h"
+
+#include <array>
 
 #include <optional>
 #include <string_view>
@@ -15,6 +19,9 @@ enum class BondRadius {
   OverFull,  ///< H_c* = H_c · min(1, 2ρ_c/(ρ_p + ρ_c)): shrinks only once a sample is over-full (default, §a.10)
   Paper,     ///< H_c* = H_c · ρ_c/(ρ_p + ρ_c): the literal reading (halves the radius of every filled sample)
 };
+constexpr std::array<core::Choice<BondRadius>, 2> field_choices(BondRadius) {
+  return {{{BondRadius::OverFull, "over-full"}, {BondRadius::Paper, "paper"}}};
+}
 std::string_view bond_radius_name(BondRadius b);
 std::optional<BondRadius> parse_bond_radius(std::string_view s);
 
@@ -22,6 +29,7 @@ std::optional<BondRadius> parse_bond_radius(std::string_view s);
 inline constexpr float kReferenceDt = 1.0f / 120.0f;
 
 struct AdaptiveParams {
+  static constexpr ControllerInfo info{"adaptive", "the paper (Zhou et al.): adaptive weights, unilateral density control, bond breaking, boundary correction", false};
   bool weights = true;              ///< eq. 1–5: scale each sample's correction by φ̃; off → φ̃ = 1
   bool boundary_correction = true;  ///< eq. 15–16: remove the outward part of a_ext at the target surface
   bool bond_breaking = true;        ///< eq. 17–19: adaptive bond radius and soft spring; off → every pair within H_c is bonded, no spring
@@ -52,8 +60,27 @@ struct AdaptiveParams {
   float gather_speed = 20.0f;       ///< speed unbonded fluid is steered at, in spacings d per second. (0, 1000]
   float gather_time = 0.1f;         ///< s, time constant with which the steering velocity is reached. (0, 10]
 
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("weights", s.weights, plain("eq. 1–5: scale each sample's correction by φ̃"));
+    f("boundary_correction", s.boundary_correction, plain("eq. 15–16: remove the outward part of a_ext at the surface"));
+    f("bond_breaking", s.bond_breaking, plain("eq. 17–19: adaptive bond radius and soft spring"));
+    f("bond_radius", s.bond_radius, plain("H_c*: shrinks once over-full (over-full) or the literal eq. 19 (paper)"));
+    f("gather", s.gather, plain("ours: unbonded fluid is steered toward under-filled samples"));
+    f("kinematic", s.kinematic, plain("corrections move fluid without becoming velocity (an option to measure)"));
+    f("max_speed", s.max_speed, open_closed(0.0, 10000.0, "speed limit of controlled fluid, d/s"));
+    f("alpha", s.alpha, open_closed(0.0, 2.0, "α of eq. 5/10, strength of the control correction"));
+    f("epsilon", s.epsilon, open_closed(0.0, 100.0, "ε_c of eq. 6, × S_0"));
+    f("clamp", s.clamp, open_closed(0.0, 1.0, "largest correction per particle and iteration, d, at Δt_ref"));
+    f("gamma", s.gamma, closed(0.0, 1.0, "γ_a of the adaptive spring (eq. 18), at Δt_ref"));
+    f("normal_threshold", s.normal_threshold, closed(0.0, 1.0, "boundary correction only where |n| ≥ this × g_ref"));
+    f("gather_fill", s.gather_fill, open_closed(0.0, 1.0, "a sample is under-filled while ρ_p/ρ_c < this"));
+    f("gather_speed", s.gather_speed, open_closed(0.0, 1000.0, "steering speed of unbonded fluid, d/s"));
+    f("gather_time", s.gather_time, open_closed(0.0, 10.0, "s, time constant of the steering"));
+  }
   /// First violation, naming `path.key`, the value and the range.
-  Status validate(std::string_view path = "controller.adaptive") const;
+  Status validate(std::string_view path = "controller.adaptive") const { return core::validate_fields(*this, path); }
 };
 
 }  // namespace ff::control

@@ -7,7 +7,7 @@
 #include "control/control_targets.h"
 #include "control/control_context.h"
 #include "core/neighbor_grid.h"
-#include "core/params.h"
+#include "core/fields.h"
 #include "sim/particle_set.h"
 
 #include <string_view>
@@ -58,17 +58,5 @@ class BaselineCore {
   core::NeighborGrid fluid_grid_{1.0f}, sample_grid_{1.0f};
   bool sample_grid_valid_ = false;
 };
-
-/// A baseline's parameters are read from the scene by name ("controller": {"pbfc": {"alpha": 1}}) and checked
-/// against their ranges through one list per struct: `P::fields(self, f)` calls f(key, value&, lo, hi) for every
-/// field (closed ranges). The first value outside its range (or not finite) is an error naming `path.key`.
-template <class P>
-Status validate_fields(const P& params, std::string_view path) {
-  Status st;
-  P::fields(params, [&](std::string_view key, const auto& v, double lo, double hi) {
-    if (st.ok()) st = core::check_range(path, key, static_cast<double>(v), lo, hi);
-  });
-  return st;
-}
 
 }  // namespace ff::control

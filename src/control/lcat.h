@@ -9,6 +9,7 @@
 //                   the template, here the whole run; the run's report counts them as added particles)
 // Repulsion particles are off (METHOD §b.3 default). Controlled: within H_c of a template particle, and every
 // temporary.
+#include "control/controller_info.h"
 #include "control/baseline_core.h"
 #include "control/steering.h"
 #include "sim/controller.h"
@@ -18,6 +19,7 @@
 namespace ff::control {
 
 struct LcatParams {
+  static constexpr ControllerInfo info{"lcat", "Schoentgen et al. 2020 (animation templates): template density and velocity forces, temporary particles", true};
   float density = 20.0f;      ///< k_ρ, m/s². [0, 1000]
   float velocity = 0.2f;      ///< k_v. [0, 1]
   float temporaries = 0.3f;   ///< τ, temporaries allowed as a fraction of the template particles. [0, 1]
@@ -25,12 +27,12 @@ struct LcatParams {
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
-    f("density", s.density, 0.0, 1000.0);
-    f("velocity", s.velocity, 0.0, 1.0);
-    f("temporaries", s.temporaries, 0.0, 1.0);
-    f("spawn_fill", s.spawn_fill, 0.0, 1.0);
+    f("density", s.density, core::closed(0.0, 1000.0, "k_ρ, m/s²"));
+    f("velocity", s.velocity, core::closed(0.0, 1.0, "k_v"));
+    f("temporaries", s.temporaries, core::closed(0.0, 1.0, "τ, temporaries allowed as a fraction of the template particles"));
+    f("spawn_fill", s.spawn_fill, core::closed(0.0, 1.0, "a template particle spawns while ρ_f/ρ_T is below this"));
   }
-  Status validate(std::string_view path = "controller.lcat") const { return validate_fields(*this, path); }
+  Status validate(std::string_view path = "controller.lcat") const { return core::validate_fields(*this, path); }
 };
 
 class LcatController final : public sim::Controller, public Steerable {
@@ -54,5 +56,13 @@ class LcatController final : public sim::Controller, public Steerable {
   std::size_t spawned_ = 0;
   std::vector<std::uint8_t> temporary_; // per particle id: a temporary
 };
+
+/// The controller table's factory (control/registry.h).
+inline Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                               const LcatParams& params) {
+  auto c = LcatController::create(std::move(targets), ctx, params);
+  if (!c) return c.error();
+  return std::unique_ptr<sim::Controller>(std::move(*c));
+}
 
 }  // namespace ff::control

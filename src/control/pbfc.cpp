@@ -4,7 +4,7 @@
 
 namespace ff::control {
 
-Result<std::unique_ptr<sim::Controller>> make_pbfc(std::vector<ControlTarget> targets, const ControlContext& ctx,
+Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                    const PbfcParams& params) {
   FF_CHECK(params.validate());
   DensitySpringConfig cfg;

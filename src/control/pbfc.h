@@ -2,11 +2,13 @@
 // `pbfc`: Zhang, Yang, Wu, Liu, "Position-based Fluid Control", i3D 2015 (METHOD.md §b.1): a bilateral density
 // constraint per control particle with one rest density, the adaptive spring on escaping particles and the
 // velocity constraint, on the engine in density_spring.h. Scale-free defaults of METHOD §b.1 [D], chosen once.
+#include "control/controller_info.h"
 #include "control/density_spring.h"
 
 namespace ff::control {
 
 struct PbfcParams {
+  static constexpr ControllerInfo info{"pbfc", "Zhang et al. 2015 (PBFC): bilateral density constraint, adaptive spring, velocity constraint", false};
   float alpha = 1.0f;            ///< α, density-constraint strength. [0, 10]
   /// ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny (~3k samples, 150 frames, the harness's CFL
   /// sub-steps): ε = 1, 10, 100 gave E 1.13, 1.05, 1.50 %; at 1 an empty target pulls the first fluid in at
@@ -22,20 +24,20 @@ struct PbfcParams {
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
-    f("alpha", s.alpha, 0.0, 10.0);
-    f("epsilon", s.epsilon, 0.01, 100.0);
-    f("spring", s.spring, 0.0, 5.0);
-    f("spring_start", s.spring_start, 0.0, 10.0);
-    f("steepness", s.steepness, 0.1, 1000.0);
-    f("bond_reach", s.bond_reach, 0.1, 4.0);
-    f("lifetime", s.lifetime, 0.0, 1000.0);
-    f("velocity", s.velocity, 0.0, 1.0);
-    f("velocity_moving", s.velocity_moving, 0.0, 1.0);
+    f("alpha", s.alpha, core::closed(0.0, 10.0, "α, density-constraint strength"));
+    f("epsilon", s.epsilon, core::closed(0.01, 100.0, "ε_c as a multiple of S_0"));
+    f("spring", s.spring, core::closed(0.0, 5.0, "β, spring step in spacings d per sub-step"));
+    f("spring_start", s.spring_start, core::closed(0.0, 10.0, "b, where the logistic switch is half on, in H_c"));
+    f("steepness", s.steepness, core::closed(0.1, 1000.0, "a · H_c, the switch's steepness"));
+    f("bond_reach", s.bond_reach, core::closed(0.1, 4.0, "D in H_c: the reference is refreshed while within D/2"));
+    f("lifetime", s.lifetime, core::closed(0.0, 1000.0, "T, sub-steps a spring survives after its particle left D/2"));
+    f("velocity", s.velocity, core::closed(0.0, 1.0, "γ of the velocity constraint"));
+    f("velocity_moving", s.velocity_moving, core::closed(0.0, 1.0, "γ while the target moves"));
   }
-  Status validate(std::string_view path = "controller.pbfc") const { return validate_fields(*this, path); }
+  Status validate(std::string_view path = "controller.pbfc") const { return core::validate_fields(*this, path); }
 };
 
-Result<std::unique_ptr<sim::Controller>> make_pbfc(std::vector<ControlTarget> targets, const ControlContext& ctx,
+Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                    const PbfcParams& params);
 
 }  // namespace ff::control

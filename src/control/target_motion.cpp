@@ -64,13 +64,10 @@ Pose TargetMotion::at(double time) const {
 Status TargetMotion::validate(std::string_view path) const {
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const auto p = fmt::format("{}.keyframes[{}]", path, k);
-    FF_CHECK(core::check_range(p, "time", keys[k].time, 0.0, 1e6));
+    FF_CHECK(core::validate_fields(keys[k], p));
     if (k > 0 && !(keys[k].time > keys[k - 1].time))
       return param_error(fmt::format("{}.time = {} must be later than the keyframe before it ({})", p, keys[k].time,
                                      keys[k - 1].time));
-    FF_CHECK(core::check_vec(p, "translate", keys[k].translate, -1e6, 1e6));
-    FF_CHECK(core::check_vec(p, "rotate", keys[k].rotate_deg, -1e6, 1e6));
-    FF_CHECK(core::check_range(p, "scale", keys[k].scale, 0.0, 1e3, core::Bound::Open));
   }
   return {};
 }

@@ -5,6 +5,7 @@
 // Before the first keyframe the target holds the first pose, after the last the last one. Angles and scale
 // are interpolated component-wise, linearly or with smoothstep easing (zero speed at every keyframe).
 #include "core/error.h"
+#include "core/fields.h"
 #include "core/types.h"
 
 #include <Eigen/Geometry>
@@ -20,6 +21,14 @@ struct Keyframe {
   Vec3f translate{Vec3f::Zero()};  ///< m, added to the rest position
   Vec3f rotate_deg{Vec3f::Zero()}; ///< degrees about x, y, z through the pivot
   float scale = 1.0f;              ///< uniform, about the pivot; (0, 1e3]
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("time", s.time, required(closed(0.0, 1e6, "s, strictly increasing along the list")));
+    f("translate", s.translate, closed(-1e6, 1e6, "m, added to the rest position"));
+    f("rotate", s.rotate_deg, closed(-1e6, 1e6, "degrees about x, y, z through the pivot"));
+    f("scale", s.scale, open_closed(0.0, 1e3, "uniform, about the pivot"));
+  }
 };
 
 struct Pose {

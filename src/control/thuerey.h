@@ -7,6 +7,7 @@
 //   velocity control             Δv_p = β_Δt Ω_v (ū_p − ṽ_p) on the low-pass velocity ṽ_p (the paper's detail
 //                                preservation), ū_p the w_v-weighted control velocity, β_Δt = 1 − (1 − β)^{Δt/0.01}
 // Controlled: within R_a of a control particle (every such particle also receives Δv).
+#include "control/controller_info.h"
 #include "control/baseline_core.h"
 #include "control/steering.h"
 #include "sim/controller.h"
@@ -16,6 +17,7 @@
 namespace ff::control {
 
 struct ThuereyParams {
+  static constexpr ControllerInfo info{"thuerey", "Thuerey et al. 2006: attraction by fill level + detail-preserving velocity control", false};
   float attraction = 20.0f;  ///< α, m/s² (METHOD §b.0 [D]; El'Beem 0.2 in LBM units). [0, 1000]
   float velocity = 0.2f;     ///< β, velocity-control strength per 0.01 s. [0, 1]
   float radius = 1.0f;       ///< R_a = R_v = radius · H_c. [0.25, 2]
@@ -23,12 +25,12 @@ struct ThuereyParams {
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
-    f("attraction", s.attraction, 0.0, 1000.0);
-    f("velocity", s.velocity, 0.0, 1.0);
-    f("radius", s.radius, 0.25, 2.0);
-    f("fill_radius", s.fill_radius, 0.1, 2.0);
+    f("attraction", s.attraction, core::closed(0.0, 1000.0, "α, m/s² (METHOD §b.0 [D]; El'Beem 0.2 in LBM units)"));
+    f("velocity", s.velocity, core::closed(0.0, 1.0, "β, velocity-control strength per 0.01 s"));
+    f("radius", s.radius, core::closed(0.25, 2.0, "R_a = R_v = radius · H_c"));
+    f("fill_radius", s.fill_radius, core::closed(0.1, 2.0, "N_full counts the particles of a ball of fill_radius · R_a (El'Beem)"));
   }
-  Status validate(std::string_view path = "controller.thuerey") const { return validate_fields(*this, path); }
+  Status validate(std::string_view path = "controller.thuerey") const { return core::validate_fields(*this, path); }
 };
 
 class ThuereyController final : public sim::Controller, public Steerable {
@@ -48,5 +50,13 @@ class ThuereyController final : public sim::Controller, public Steerable {
   float ra_ = 0.0f, n_full_ = 1.0f;
   std::vector<float> q_;  // 1 − fill, per control particle
 };
+
+/// The controller table's factory (control/registry.h).
+inline Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
+                                                               const ThuereyParams& params) {
+  auto c = ThuereyController::create(std::move(targets), ctx, params);
+  if (!c) return c.error();
+  return std::unique_ptr<sim::Controller>(std::move(*c));
+}
 
 }  // namespace ff::control

@@ -4,7 +4,7 @@
 
 namespace ff::control {
 
-Result<std::unique_ptr<sim::Controller>> make_weighted(std::vector<ControlTarget> targets, const ControlContext& ctx,
+Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                        const WeightedParams& params) {
   FF_CHECK(params.validate());
   DensitySpringConfig cfg;

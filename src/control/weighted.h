@@ -3,11 +3,13 @@
 // is the documented approximation): control-particle weights from the samples' SPH colour field, a bilateral
 // density constraint toward each control particle's own density ρ_c,i (sparse regions ask for less fluid) and the
 // adaptive spring of `pbfc`; no bond breaking, no boundary correction, no velocity term.
+#include "control/controller_info.h"
 #include "control/density_spring.h"
 
 namespace ff::control {
 
 struct WeightedParams {
+  static constexpr ControllerInfo info{"weighted", "Zhou et al. (ref. [60]): colour-field weights, bilateral density to rho_c, adaptive spring", true};
   float alpha = 1.0f;         ///< density-constraint strength. [0, 10]
   /// ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny as pbfc's: ε = 1, 10, 100 gave E 0.72, 1.04,
   /// 4.81 %.
@@ -21,19 +23,19 @@ struct WeightedParams {
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
-    f("alpha", s.alpha, 0.0, 10.0);
-    f("epsilon", s.epsilon, 0.01, 100.0);
-    f("kappa", s.kappa, 0.0, 10.0);
-    f("spring", s.spring, 0.0, 5.0);
-    f("spring_start", s.spring_start, 0.0, 10.0);
-    f("steepness", s.steepness, 0.1, 1000.0);
-    f("bond_reach", s.bond_reach, 0.1, 4.0);
-    f("lifetime", s.lifetime, 0.0, 1000.0);
+    f("alpha", s.alpha, core::closed(0.0, 10.0, "density-constraint strength"));
+    f("epsilon", s.epsilon, core::closed(0.01, 100.0, "ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny as pbfc's: ε = 1, 10, 100 gave E 0.72, 1.04,"));
+    f("kappa", s.kappa, core::closed(0.0, 10.0, "κ of the colour-field weight w_i = 1 + κ (1 − cf_i/max cf)"));
+    f("spring", s.spring, core::closed(0.0, 5.0, "as pbfc"));
+    f("spring_start", s.spring_start, core::closed(0.0, 10.0, "as pbfc, in H_c"));
+    f("steepness", s.steepness, core::closed(0.1, 1000.0, "as pbfc"));
+    f("bond_reach", s.bond_reach, core::closed(0.1, 4.0, "as pbfc, in H_c"));
+    f("lifetime", s.lifetime, core::closed(0.0, 1000.0, "as pbfc, sub-steps"));
   }
-  Status validate(std::string_view path = "controller.weighted") const { return validate_fields(*this, path); }
+  Status validate(std::string_view path = "controller.weighted") const { return core::validate_fields(*this, path); }
 };
 
-Result<std::unique_ptr<sim::Controller>> make_weighted(std::vector<ControlTarget> targets, const ControlContext& ctx,
+Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                        const WeightedParams& params);
 
 }  // namespace ff::control

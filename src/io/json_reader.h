@@ -26,6 +26,7 @@ class JsonObject {
   /// Ok when `j` is an object; otherwise an error naming the path.
   Status check_object() const;
   bool has(std::string_view key) const;
+  const std::string& path() const { return path_; }
   std::string path_of(std::string_view key) const;
 
   // Each get: absent key → value untouched, success; wrong type → Param error naming the path.

@@ -61,8 +61,8 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
 
   TargetShape shape;
   shape.sdf_ = std::move(grid);
-  shape.grid_ = PointGrid(controls, d, box);
-  shape.controls_ = PointTree(controls);
+  shape.grid_ = core::PointGrid(controls, d, box);
+  shape.controls_ = core::PointTree(controls);
   shape.box_ = box;
   shape.diagonal_ = diagonal;
   shape.control_spacing_ = d;
@@ -118,13 +118,13 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
 
   // Backward: each sample's distance to the nearest fluid particle, in the samples' cell order. A grid of one
   // fluid spacing over the samples' box (+2 cells) answers where the fluid is near; the rest go to a tree.
-  const PointGrid& samples = shape.control_grid();
+  const core::PointGrid& samples = shape.control_grid();
   const auto m_samples = static_cast<std::int64_t>(samples.points().size());
   const float fluid_cell = r > 0.0 && std::isfinite(r) ? float(2.0 * r / s) : shape.control_spacing();
   Aabb region = shape.sample_bounds();
   region.min.array() -= 2.0f * fluid_cell;
   region.max.array() += 2.0f * fluid_cell;
-  const PointGrid fluid_grid(x, fluid_cell, region);
+  const core::PointGrid fluid_grid(x, fluid_cell, region);
   std::vector<float> to_fluid(samples.points().size());
   for_each_chunk(m_samples, [&](std::int64_t begin, std::int64_t end) {
     for (auto j = static_cast<std::size_t>(begin); j < static_cast<std::size_t>(end); ++j)
@@ -134,12 +134,12 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
   for (std::size_t j = 0; j < to_fluid.size(); ++j)
     if (std::isnan(to_fluid[j])) unresolved.push_back(static_cast<Index>(j));
   if (!unresolved.empty()) {
-    const PointTree fluid(x);
+    const core::PointTree fluid(x);
     for_each_chunk(static_cast<std::int64_t>(unresolved.size()), [&](std::int64_t begin, std::int64_t end) {
       Index hint = kInvalidIndex;  // consecutive unresolved samples are near each other: each seeds the next
       for (std::int64_t k = begin; k < end; ++k) {
         const Index j = unresolved[static_cast<std::size_t>(k)];
-        const PointTree::Nearest nb = fluid.nearest(samples.points()[j], hint);
+        const core::PointTree::Nearest nb = fluid.nearest(samples.points()[j], hint);
         hint = nb.slot;
         to_fluid[j] = nb.distance2;
       }

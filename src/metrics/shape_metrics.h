@@ -18,8 +18,8 @@
 #include "core/error.h"
 #include "core/types.h"
 #include "io/triangle_mesh.h"
-#include "metrics/point_grid.h"
-#include "metrics/point_tree.h"
+#include "core/point_grid.h"
+#include "core/point_tree.h"
 #include "sampling/sdf_grid.h"
 
 #include <Eigen/Geometry>
@@ -60,14 +60,14 @@ class TargetShape {
   std::size_t bytes() const;
 
   /// The control samples in cell order (their grid), for measure().
-  const PointGrid& control_grid() const { return grid_; }
+  const core::PointGrid& control_grid() const { return grid_; }
   const sampling::SdfGrid& sdf() const { return sdf_; }
 
  private:
   TargetShape() = default;
   sampling::SdfGrid sdf_;
-  PointGrid grid_;
-  PointTree controls_;
+  core::PointGrid grid_;
+  core::PointTree controls_;
   Aabb box_;
   float diagonal_ = 0.0f;
   float control_spacing_ = 0.0f;
@@ -100,8 +100,8 @@ struct FrameMetrics {
 /// that scale's inverse (world metres per rest-frame metre). Particles with a non-finite position are
 /// skipped (the solver reports a blow-up itself).
 /// With no fluid of the target, every distance and E are NaN (undefined) and the fractions 0.
-/// Cost: O(n + m) for n fluid particles and m samples when the fluid is near the shape (a PointGrid over the
-/// fluid per call), plus a PointTree over the fluid, O(n log n), when some samples have no fluid within
+/// Cost: O(n + m) for n fluid particles and m samples when the fluid is near the shape (a core::PointGrid over the
+/// fluid per call), plus a core::PointTree over the fluid, O(n log n), when some samples have no fluid within
 /// about two fluid spacings (holes, fluid not arrived). Deterministic for any thread count (fixed-order
 /// sums, exact minima).
 FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,

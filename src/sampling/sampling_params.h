@@ -2,7 +2,10 @@
 // Parameters of target sampling (METHOD.md §a.1–§a.2, §c.3–§c.5), with documented defaults, units and
 // ranges. JSON keys in scene files are the field names.
 #include "core/error.h"
+#include "core/fields.h"
 #include "core/types.h"
+
+#include <array>
 
 #include <cstdint>
 #include <optional>
@@ -16,13 +19,30 @@ enum class Method {
   Voxel,      ///< cubic lattice inside the volume (the paper's comparison sampler, PBFC's)
   Surface,    ///< blue noise on the triangles (thin shells, boundary layers)
 };
+constexpr std::array<core::Choice<Method>, 3> field_choices(Method) {
+  return {{{Method::BlueNoise, "blue-noise"}, {Method::Voxel, "voxel"}, {Method::Surface, "surface"}}};
+}
 std::string_view method_name(Method m);
 std::optional<Method> parse_method(std::string_view name);
+
+/// A box of samples to drop (metres, target space).
+struct DropBox : Aabb {
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("min", s.min, core::required(core::closed(-1e6, 1e6, "m, lower corner")));
+    f("max", s.max, core::required(core::closed(-1e6, 1e6, "m, upper corner")));
+  }
+};
 
 /// Samples dropped on purpose, to test a controller's robustness to sampling gaps (paper Fig. 3).
 struct SparseParams {
   float drop_fraction = 0.0f;      ///< fraction of samples removed at random (seeded). [0, 0.99]
-  std::vector<Aabb> drop_boxes;    ///< every sample inside one of these boxes is removed (metres, target space)
+  std::vector<DropBox> drop_boxes; ///< every sample inside one of these boxes is removed (metres, target space)
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("drop_fraction", s.drop_fraction, core::closed(0.0, 0.99, "fraction of samples removed at random (seeded)"));
+    f("drop_boxes", s.drop_boxes, core::plain("samples inside these boxes are removed: [{\"min\", \"max\"}, ...]"));
+  }
   Status validate(std::string_view path = "sampling.sparse") const;
   bool active() const { return drop_fraction > 0.0f || !drop_boxes.empty(); }
 };
@@ -42,6 +62,20 @@ struct SamplingParams {
   std::size_t max_samples = 20'000'000;  ///< refuse to make more samples than this. [1, 1e9]
   SparseParams sparse;
 
+  /// The scene's keys. rest_density is not one: it is always the solver's (pipeline::target_sampling).
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("method", s.method, plain("how targets become control particles"));
+    f("spacing", s.spacing, closed(0.0, 1e3, "d_c, m; 0 = the fluid spacing d"));
+    f("auto_count", s.auto_count, closed(100, 1e8, "control samples aimed at when the particle radius is automatic"));
+    f("seed", s.seed, plain("random seed (results are deterministic for a seed)"));
+    f("relax_steps", s.relax_steps, closed(0, 10000, "SPH relaxation steps of the blue-noise sampler"));
+    f("support_factor", s.support_factor, closed(1.5, 8.0, "H_c = support_factor · d_c"));
+    f("phi_offset", s.phi_offset, closed(0.0, 1.0, "c of eq. 4"));
+    f("max_samples", s.max_samples, closed(1, 1e9, "refuse to make more samples than this"));
+    f("sparse", s.sparse, plain("samples dropped on purpose (robustness tests, paper Fig. 3)"));
+  }
   Status validate(std::string_view path = "sampling") const;
 };
 

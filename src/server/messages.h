@@ -6,7 +6,7 @@
 //   {"type": "pose", "target": 0, "translate": [x, y, z], "rotate": [rx, ry, rz], "scale": 1}   (rotate, scale optional)
 //   {"type": "mesh", "target": 0, "mesh": 1}      (an index into the hello message's "meshes")
 //   {"type": "surface", "on": true}               (live surface: the reconstructed mesh, sent about twice a second)
-#include "app/live_scene.h"
+#include "pipeline/live_scene.h"
 #include "core/error.h"
 
 #include <string>
@@ -19,7 +19,7 @@ inline constexpr std::size_t kMaxClientMessage = 16 * 1024;  ///< bytes; a real 
 struct Command {
   enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh, Surface } kind = Kind::Play;
   std::size_t target = 0;
-  app::LivePose pose;
+  pipeline::LivePose pose;
   std::string name;      ///< Controller
   std::size_t mesh = 0;  ///< Mesh
   bool on = false;       ///< Surface

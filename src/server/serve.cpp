@@ -1,11 +1,12 @@
 #include "server/serve.h"
 
-#include "app/live_scene.h"
-#include "app/mesh_export.h"
+#include "pipeline/live_scene.h"
+#include "pipeline/mesh_export.h"
 #include "control/registry.h"
 #include "core/timer.h"
 #include "io/csv_table.h"
-#include "io/scene.h"
+#include "io/particle_frames.h"
+#include "scene/scene.h"
 #include "io/write_ply.h"
 #include "server/frame_codec.h"
 #include "server/messages.h"
@@ -58,7 +59,7 @@ namespace {
 
 json vec(const Vec3f& v) { return json::array({v.x(), v.y(), v.z()}); }
 
-json pose_json(std::size_t t, const app::LivePose& p, double time) {
+json pose_json(std::size_t t, const pipeline::LivePose& p, double time) {
   return {{"type", "pose"},           {"target", t},          {"translate", vec(p.translate)},
           {"rotate", vec(p.rotate_deg)}, {"scale", p.scale}, {"time", time}};
 }
@@ -124,7 +125,7 @@ struct Shared {
   }
 };
 
-json live_hello(const app::LiveScene& s, bool paused, bool surface) {
+json live_hello(const pipeline::LiveScene& s, bool paused, bool surface) {
   json targets = json::array();
   for (std::size_t t = 0; t < s.targets().size(); ++t) {
     const auto& lt = s.targets()[t];
@@ -158,7 +159,7 @@ json live_hello(const app::LiveScene& s, bool paused, bool surface) {
 // wall time: 10k particles take ~0.1 s, so the simulation keeps most of its time.
 constexpr double kSurfaceEvery = 0.5;
 
-void publish_surface(Shared& sh, const app::LiveScene& scene) {
+void publish_surface(Shared& sh, const pipeline::LiveScene& scene) {
   core::Stopwatch clock;
   const auto& x = scene.particles().position;
   if (x.empty()) return;
@@ -200,7 +201,7 @@ void error_text(Shared& sh, const std::string& what) {
 }
 
 // The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
-void live_loop(app::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
+void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
   RateMeter rate;
   // Real time paces at the scene's frame rate; --max-fps caps the wall rate below that (or, as fast as possible, alone).
   const double cap = opt.max_fps > 0 ? opt.max_fps : 0.0;
@@ -285,7 +286,7 @@ struct Recording {
 
 Result<Recording> open_recording(const fs::path& out) {
   Recording r;
-  FF_TRY(r.frames, app::particle_frames(out));
+  FF_TRY(r.frames, io::particle_frames(out));
   r.animation = fs::is_regular_file(out / "animation.glb");
   std::ifstream rep(out / "report.json");
   if (rep) {
@@ -355,7 +356,7 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
     return input_error(fmt::format("{}: three.js is not installed (npm install)", three.string()));
 
   Shared sh;
-  std::unique_ptr<app::LiveScene> live;
+  std::unique_ptr<pipeline::LiveScene> live;
   std::optional<Recording> rec;
   std::vector<Mount> mounts{{"/", web}, {"/vendor/three/", three}};
   std::error_code ec;
@@ -366,12 +367,12 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
                  rec->animation ? " and its animation.glb" : "");
     sh.set_hello(playback_hello(*rec, false));
   } else {
-    FF_TRY(io::Scene scene, io::load_scene(opt.input));
-    app::LiveOptions lo;
+    FF_TRY(scene::Scene scene, scene::load_scene(opt.input));
+    pipeline::LiveOptions lo;
     lo.cache_dir = opt.cache_dir;
     lo.controller = opt.controller;
     lo.extra_meshes = opt.meshes;
-    FF_TRY(live, app::LiveScene::create(scene, lo, progress));
+    FF_TRY(live, pipeline::LiveScene::create(scene, lo, progress));
     spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
     sh.set_hello(live_hello(*live, false, false));
   }

@@ -2,7 +2,10 @@
 // Parameters of the PBF solver, the domain and the fluid sources (METHOD.md §0, §c.2), with
 // documented defaults, units and ranges. JSON keys in scene files are the field names.
 #include "core/error.h"
+#include "core/fields.h"
 #include "core/types.h"
+
+#include <array>
 
 #include <string_view>
 #include <vector>
@@ -39,6 +42,32 @@ struct SolverParams {
 
   float spacing() const { return 2.0f * particle_radius; }
   float support() const { return support_factor * particle_radius; }
+
+  /// The one list of the fields (core/fields.h): validation, the scene reader and writer, the key table.
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("particle_radius", s.particle_radius, open_closed(1e-4, 10.0, "r, m; spacing d = 2r (default: from the targets)"));
+    f("support_factor", s.support_factor, closed(2.5, 8.0, "H_p = support_factor · r"));
+    f("iterations", s.iterations, closed(1, 100, "density-constraint iterations per sub-step (minimum)"));
+    f("max_iterations", s.max_iterations, closed(1, 1000, "more iterations while the density error is high; ≥ iterations"));
+    f("max_density_error", s.max_density_error, open_closed(0.0, 1.0, "target mean compression max(ρ/ρ0 − 1, 0)"));
+    f("max_dt", s.max_dt, open_closed(0.0, 0.1, "largest sub-step, s"));
+    f("cfl", s.cfl, open_closed(0.0, 1.0, "largest displacement per sub-step, in spacings d"));
+    f("max_substeps", s.max_substeps, closed(1, 10000, "cap on sub-steps per output frame"));
+    f("gravity", s.gravity, closed(-1000.0, 1000.0, "m/s², each component"));
+    f("rest_density", s.rest_density, open_closed(0.0, 1e5, "physical ρ0, kg/m³"));
+    f("viscosity", s.viscosity, closed(0.0, 1.0, "XSPH η (paper eq. 12)"));
+    f("vorticity", s.vorticity, closed(0.0, 10.0, "vorticity confinement ε_v, m/s"));
+    f("epsilon", s.epsilon, open_closed(0.0, 100.0, "λ relaxation ε, × S_0"));
+    f("scorr_k", s.scorr_k, closed(0.0, 1.0, "tensile-instability strength k"));
+    f("scorr_n", s.scorr_n, closed(1, 8, "s_corr exponent n"));
+    f("scorr_dq", s.scorr_dq, open(0.0, 1.0, "|Δq|, × H_p"));
+    f("surface_tension", s.surface_tension, closed(0.0, 10.0, "σ (seed eq. 13) at the reference spacing 0.05 m; 0 = off"));
+    f("surface_tension_samples", s.surface_tension_samples, closed(1.0, 1e6, "C_sd, Monte-Carlo points per second"));
+    f("drag", s.drag, closed(0.0, 10.0, "s, air drag scale (seed eq. 14); 0 = off"));
+    f("air_density", s.air_density, open_closed(0.0, 100.0, "ρ_a, kg/m³"));
+  }
   /// First violation, naming `path.key`, the value and the range.
   Status validate(std::string_view path = "solver") const;
 };
@@ -47,17 +76,36 @@ struct SolverParams {
 struct Domain {
   Vec3f min{-1.0f, 0.0f, -1.0f};  ///< m
   Vec3f max{1.0f, 2.0f, 1.0f};    ///< m; each component > min by at least 4r
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("min", s.min, core::closed(-1e6, 1e6, "m, the lower corner (default: the targets and the fluid with a margin)"));
+    f("max", s.max, core::closed(-1e6, 1e6, "m, the upper corner; at least 4r above min on every axis"));
+  }
   Status validate(float particle_radius, std::string_view path = "domain") const;
 };
 
 /// A fluid source filled on the cubic lattice of spacing d at the start of the run.
 struct FluidSource {
   enum class Shape { Box, Sphere };
+  friend constexpr std::array<core::Choice<Shape>, 2> field_choices(Shape) { return {{{Shape::Box, "box"}, {Shape::Sphere, "sphere"}}}; }
   Shape shape = Shape::Box;
   Vec3f min{Vec3f::Zero()}, max{Vec3f::Zero()};  ///< box corners, m
   Vec3f center{Vec3f::Zero()};                   ///< sphere centre, m
   float radius = 0.0f;                           ///< sphere radius, m, > 0
   Vec3f velocity{Vec3f::Zero()};                 ///< initial velocity, m/s
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("shape", s.shape, core::plain("box or sphere"));
+    f("min", s.min, core::plain("m, a box's lower corner (box: required)"));
+    f("max", s.max, core::plain("m, a box's upper corner (box: required)"));
+    f("center", s.center, core::plain("m, a sphere's centre (sphere: required)"));
+    f("radius", s.radius, core::plain("m, a sphere's radius, > 0 (sphere: required)"));
+    f("velocity", s.velocity, core::closed(-1e4, 1e4, "m/s, initial velocity"));
+  }
+  /// The fields a shape needs ("box": min, max; "sphere": center, radius).
+  static std::array<std::string_view, 2> required_for(Shape shape) {
+    return shape == Shape::Box ? std::array<std::string_view, 2>{"min", "max"} : std::array<std::string_view, 2>{"center", "radius"};
+  }
   Status validate(std::string_view path) const;
 };
 

@@ -6,29 +6,15 @@
 
 namespace ff::surface {
 
-std::string_view extraction_name(Extraction e) {
-  return e == Extraction::MarchingTetrahedra ? "rmt" : "mc";
-}
+std::string_view extraction_name(Extraction e) { return core::choice_name(e); }
 
 Result<Extraction> parse_extraction(std::string_view name) {
-  if (name == "mc") return Extraction::MarchingCubes;
-  if (name == "rmt") return Extraction::MarchingTetrahedra;
+  if (const auto e = core::find_choice<Extraction>(name)) return *e;
   return param_error(fmt::format("'{}' is not a surface extraction (mc or rmt)", name));
 }
 
 Status SurfaceParams::validate(std::string_view path) const {
-  FF_CHECK(core::check_range(path, "cell_size", cell_size, 0.05, 4.0));
-  FF_CHECK(core::check_range(path, "kernel_radius", kernel_radius, 0.5, 8.0));
-  FF_CHECK(core::check_range(path, "particle_volume", particle_volume, 0.0, 10.0, core::Bound::Open));
-  FF_CHECK(core::check_range(path, "iso", iso, 0.0, 1.0, core::Bound::Open, core::Bound::Open));
-  FF_CHECK(core::check_range(path, "smoothing_passes", smoothing_passes, 0, 100));
-  FF_CHECK(core::check_range(path, "smoothing_beta", smoothing_beta, 0.0, 1.0));
-  FF_CHECK(core::check_range(path, "smoothing_radius", smoothing_radius, 0.5, 8.0));
-  FF_CHECK(core::check_range(path, "smoothing_inflate", smoothing_inflate, 0.0, 1.0));
-  FF_CHECK(core::check_range(path, "decimate_error", decimate_error, 0.0, 10.0));
-  FF_CHECK(core::check_range(path, "max_triangles", double(max_triangles), 0.0, 1e9));
-  FF_CHECK(core::check_range(path, "min_component_volume", min_component_volume, 0.0, 1e9));
-  FF_CHECK(core::check_range(path, "max_blocks", double(max_blocks), 1.0, 1e9));
+  FF_CHECK(core::validate_fields(*this, path));
   // The sparse grid evaluates each 8³-node block from the particles of its 27 neighbouring blocks only.
   if (!(kernel_radius <= 8.0f * cell_size))
     return param_error(

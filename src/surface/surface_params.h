@@ -2,6 +2,9 @@
 // Parameters of surface reconstruction (METHOD.md §a.7, §c.8, §c.9). Every length is relative to the particle
 // spacing d (the rest distance between fluid particles), so the defaults need no tuning across scene scales.
 #include "core/error.h"
+#include "core/fields.h"
+
+#include <array>
 
 #include <cstddef>
 #include <string_view>
@@ -18,6 +21,10 @@ enum class Extraction {
   MarchingTetrahedra,
 };
 
+constexpr std::array<core::Choice<Extraction>, 2> field_choices(Extraction) {
+  return {{{Extraction::MarchingCubes, "mc"}, {Extraction::MarchingTetrahedra, "rmt"}}};
+}
+
 /// The command line's name of an extraction: "mc" or "rmt" (which also names plain marching tetrahedra when the
 /// reduction is off).
 std::string_view extraction_name(Extraction e);
@@ -29,6 +36,10 @@ enum class Reduction {
   None,     ///< keep every extracted vertex
   Cluster,  ///< regularisation of Treece et al.: vertices nearest to one grid node merge (default)
 };
+
+constexpr std::array<core::Choice<Reduction>, 2> field_choices(Reduction) {
+  return {{{Reduction::None, "none"}, {Reduction::Cluster, "cluster"}}};
+}
 
 struct SurfaceParams {
   // --- scalar field φ(x) = Σ_p V_p W_poly6(x − x_p, h) (METHOD §a.7 [D]) ------------------------------------
@@ -80,6 +91,25 @@ struct SurfaceParams {
   /// 8 bytes per block elsewhere). [1, 1e9]
   std::size_t max_blocks = 50'000'000;
 
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("cell_size", s.cell_size, closed(0.05, 4.0, "grid cell edge, × d"));
+    f("kernel_radius", s.kernel_radius, closed(0.5, 8.0, "h of W_poly6, × d; at most 8 cells"));
+    f("particle_volume", s.particle_volume, open_closed(0.0, 10.0, "V_p, × d³"));
+    f("iso", s.iso, open(0.0, 1.0, "iso value of φ"));
+    f("smoothing_passes", s.smoothing_passes, closed(0, 100, "passes of eq. 20"));
+    f("smoothing_beta", s.smoothing_beta, closed(0.0, 1.0, "β of eq. 20"));
+    f("smoothing_radius", s.smoothing_radius, closed(0.5, 8.0, "H_v of eq. 21, × cell"));
+    f("smoothing_inflate", s.smoothing_inflate, closed(0.0, 1.0, "μ of a Taubin back-step after each pass (0: plain eq. 20)"));
+    f("extraction", s.extraction, plain("marching cubes (mc) or regularised marching tetrahedra (rmt)"));
+    f("reduction", s.reduction, plain("vertices nearest to one grid node merge (cluster) or not (none)"));
+    f("decimate_error", s.decimate_error, closed(0.0, 10.0, "meshoptimizer's error bound, × d (0: none)"));
+    f("max_triangles", s.max_triangles, closed(0, 1e9, "triangle budget (0: none)"));
+    f("min_component_volume", s.min_component_volume, closed(0.0, 1e9, "drop components smaller than this, × d³"));
+    f("remove_cavities", s.remove_cavities, plain("drop closed components that enclose air"));
+    f("max_blocks", s.max_blocks, closed(1, 1e9, "refuse grids needing more 8³-node blocks than this"));
+  }
   Status validate(std::string_view path = "surface") const;
 };
 

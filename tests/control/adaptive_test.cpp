@@ -25,7 +25,7 @@ test::Outcome simulate(const Case& c, const std::string& controller, int frames,
                        const Case* measure_against = nullptr) {
   control::ControllerSpec spec;
   spec.name = controller;
-  spec.adaptive = ap;
+  spec.get<control::AdaptiveParams>() = ap;
   return test::simulate(c, spec, frames, motion, swaps, measure_against);
 }
 

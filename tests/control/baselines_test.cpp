@@ -85,15 +85,15 @@ TEST(Thuerey, AttractionFadesAsTheControlParticleFills) {
   // |A| = q, Ω = q w_a(0.6 R_a) = 0.8 q, a = α Ω |A|; the probe itself fills the control particle a little:
   // q = 1 − 0.8/N_full, N_full = (4/3)π (0.75 R_a)³/d³.
   const float n_full = 4.0f / 3.0f * 3.14159265f * std::pow(0.75f * kHc / kD, 3.0f), q = 1.0f - 0.8f / n_full;
-  EXPECT_NEAR(a_empty.norm(), spec.thuerey.attraction * 0.8f * q * q, 1e-3f * spec.thuerey.attraction);
+  EXPECT_NEAR(a_empty.norm(), spec.get<control::ThuereyParams>().attraction * 0.8f * q * q, 1e-3f * spec.get<control::ThuereyParams>().attraction);
   EXPECT_LT(a_full.norm(), 0.05f * a_empty.norm()) << "a full control particle (q = 0) attracts nothing";
 }
 
 TEST(Pbfc, SpringActsOnlyOnEscapingParticles) {
   control::ControllerSpec spec;
   spec.name = "pbfc";
-  spec.pbfc.alpha = 0.0f;     // spring alone
-  spec.pbfc.velocity = 0.0f;
+  spec.get<control::PbfcParams>().alpha = 0.0f;     // spring alone
+  spec.get<control::PbfcParams>().velocity = 0.0f;
   auto c = make(spec, make_set({Vec3f::Zero()}));
   sim::ParticleSet p;
   add(p, Vec3f(0.3f * kHc, 0, 0));  // within D/2: takes the control particle as its reference
@@ -109,7 +109,7 @@ TEST(Pbfc, SpringActsOnlyOnEscapingParticles) {
   const Vec3f near = step(Vec3f(0.3f * kHc, 0, 0));
   EXPECT_LT(near.norm(), 1e-4f * kD) << "no spring near the reference";
   const Vec3f away = step(Vec3f(2.0f * kHc, 0, 0));  // escaped beyond b = 1.5 H_c: σ ≈ 1
-  EXPECT_NEAR(away.norm(), spec.pbfc.spring * kD, 0.02f * kD);
+  EXPECT_NEAR(away.norm(), spec.get<control::PbfcParams>().spring * kD, 0.02f * kD);
   EXPECT_LT(away.x(), 0.0f) << "pulled back toward its reference";
   for (int k = 0; k < 3; ++k) step(Vec3f(2.0f * kHc, 0, 0));
   const Vec3f expired = step(Vec3f(2.0f * kHc, 0, 0));
@@ -129,8 +129,8 @@ TEST(Weighted, PullsHarderTowardASparseControlParticle) {
   auto move = [&](float kappa) {
     control::ControllerSpec spec;
     spec.name = "weighted";
-    spec.weighted.kappa = kappa;
-    spec.weighted.spring = 0.0f;
+    spec.get<control::WeightedParams>().kappa = kappa;
+    spec.get<control::WeightedParams>().spring = 0.0f;
     auto c = make(spec, make_set(x));
     sim::ParticleSet p;
     add(p, lone + Vec3f(0.5f * kHc, 0, 0));
@@ -179,7 +179,7 @@ TEST(Lcat, SpawnsTemporariesIntoAnEmptyTemplateUpToItsShare) {
   auto v = step_view();
   c->begin_step(v, p);
   c->emit(v, p);
-  const auto cap = static_cast<std::size_t>(std::floor(spec.lcat.temporaries * 100.0f));
+  const auto cap = static_cast<std::size_t>(std::floor(spec.get<control::LcatParams>().temporaries * 100.0f));
   EXPECT_EQ(p.size(), 1 + cap) << "τ N_T temporaries at the first sub-step (every sample is empty)";
   EXPECT_TRUE(p.consistent());
   EXPECT_EQ(p.position[1], x[0]) << "spawned at the template particle";

@@ -6,7 +6,7 @@
 #include "control/control_cases.h"
 #include "control/lcat.h"
 #include "control/registry.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -95,42 +95,32 @@ TEST_P(Conformance, UnknownOrOutOfRangeParametersAreAClearError) {
   // An unknown key inside the controller's own parameter object (or, for `none`, which has none, the object itself).
   const std::string text = name == "none" ? R"({"controller": {"name": "none", "none": {"x": 1}}})"
                                           : R"({"controller": {"name": ")" + name + R"(", ")" + name + R"(": {"bogus_key": 1}}})";
-  auto s = io::parse_scene(text, ".", "scene.json");
+  auto s = scene::parse_scene(text, ".", "scene.json");
   ASSERT_FALSE(s.has_value()) << name;
   const std::string want = name == "none" ? "controller.none" : "controller." + name + ".bogus_key";
   EXPECT_NE(s.error().message.find(want), std::string::npos) << s.error().message;
   EXPECT_EQ(s.error().message.find('\n'), std::string::npos);
-  if (name == "none" || name == "adaptive") return;
+  if (name == "none") return;
   // The first parameter of each baseline set far outside its range.
-  auto spec = spec_of(name);
-  std::string first;
-  auto visit = [&](auto& params) {
-    std::remove_reference_t<decltype(params)>::fields(params, [&](std::string_view k, float& v, double, double hi) {
-      if (first.empty()) first = std::string(k), v = static_cast<float>(hi * 10 + 1);
-    });
-  };
-  if (name == "thuerey") visit(spec.thuerey);
-  if (name == "pbfc") visit(spec.pbfc);
-  if (name == "weighted") visit(spec.weighted);
-  if (name == "rscf") visit(spec.rscf);
-  if (name == "lcat") visit(spec.lcat);
-  const auto st = spec.validate();
-  ASSERT_FALSE(st.ok()) << name;
-  EXPECT_NE(st.error().message.find("controller." + name + "." + first), std::string::npos) << st.error().message;
-  // And NaN.
-  auto nan_spec = spec_of(name);
-  first.clear();
-  auto visit_nan = [&](auto& params) {
-    std::remove_reference_t<decltype(params)>::fields(params, [&](std::string_view k, float& v, double, double) {
-      if (first.empty()) first = std::string(k), v = std::nanf("");
-    });
-  };
-  if (name == "thuerey") visit_nan(nan_spec.thuerey);
-  if (name == "pbfc") visit_nan(nan_spec.pbfc);
-  if (name == "weighted") visit_nan(nan_spec.weighted);
-  if (name == "rscf") visit_nan(nan_spec.rscf);
-  if (name == "lcat") visit_nan(nan_spec.lcat);
-  EXPECT_FALSE(nan_spec.validate().ok()) << name;
+  // The first number of the controller's own parameters (the table's row for `name`), far outside its range, then NaN.
+  for (const bool nan : {false, true}) {
+    auto spec = spec_of(name);
+    std::string first;
+    std::apply([&](auto&... params) {
+      const auto visit = [&](auto& p) {
+        if (p.info.name != name) return;
+        std::remove_reference_t<decltype(p)>::fields(p, [&](std::string_view k, auto& v, const core::FieldInfo& info) {
+          if constexpr (std::is_floating_point_v<std::remove_reference_t<decltype(v)>>)
+            if (first.empty() && info.ranged()) first = std::string(k), v = nan ? std::nanf("") : static_cast<float>(info.hi * 10 + 1);
+        });
+      };
+      (visit(params), ...);
+    }, spec.params);
+    ASSERT_FALSE(first.empty()) << name << " has no ranged number to test";
+    const auto st = spec.validate();
+    ASSERT_FALSE(st.ok()) << name << (nan ? " NaN" : "");
+    EXPECT_NE(st.error().message.find("controller." + name + "." + first), std::string::npos) << st.error().message;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(registered()),

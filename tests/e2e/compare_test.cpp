@@ -1,7 +1,7 @@
 // End-to-end tests of `fluidform compare` (issue 5): one row per controller in table.md / table.csv, the
 // controller beats plain PBF, an unknown controller name is refused before anything runs, and the error-rate
 // column is the same when the compare is run again.
-#include "app/compare.h"
+#include "pipeline/compare.h"
 #include "e2e/cli_support.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
@@ -109,13 +109,13 @@ TEST_F(Compare, CrashOfOneControllerIsAFailureRow) {
   std::ofstream(script) << "#!/bin/sh\ncase \"$*\" in *\"--controller none\"*) kill -SEGV $$;; esac\nexec '"
                         << test::binary().string() << "' \"$@\"\n";
   fs::permissions(script, fs::perms::owner_all);
-  app::CompareOptions o;
+  pipeline::CompareOptions o;
   o.scene_file = *scene_;
   o.out_dir = *dir_ / "crash";
   o.controllers = {"none", "adaptive"};
   o.frames = 10;
   o.exe = script;
-  auto table = app::run_compare(o);
+  auto table = pipeline::run_compare(o);
   ASSERT_TRUE(table.has_value()) << table.error().message;
   ASSERT_EQ(table->rows.size(), 2u);
   EXPECT_FALSE(table->rows[0].ok);

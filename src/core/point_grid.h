@@ -16,7 +16,7 @@
 #include <span>
 #include <vector>
 
-namespace ff::metrics {
+namespace ff::core {
 
 class PointGrid {
  public:
@@ -50,4 +50,4 @@ class PointGrid {
   std::vector<Vec3f> points_;  // cell order
 };
 
-}  // namespace ff::metrics
+}  // namespace ff::core

@@ -1,15 +1,16 @@
-#include "app/run_pipeline.h"
+#include "pipeline/run.h"
 
-#include "app/mesh_export.h"
+#include "pipeline/mesh_export.h"
 
-#include "app/auto_scene.h"
-#include "app/scene_setup.h"
+#include "pipeline/auto_scene.h"
+#include "pipeline/scene_setup.h"
 
 #include "core/memory.h"
 #include "core/parallel.h"
 #include "core/timer.h"
 #include "io/atomic_file.h"
 #include "io/load_mesh.h"
+#include "io/particle_frames.h"
 #include "io/write_ply.h"
 #include "sim/checkpoint.h"
 #include "sim/emitter.h"
@@ -25,7 +26,7 @@
 #include <fstream>
 #include <iterator>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -141,45 +142,6 @@ std::string target_metrics_csv(const std::vector<TargetRow>& rows) {
   return s;
 }
 
-json scene_to_json(const io::Scene& s) {
-  auto v3 = [](const Vec3f& v) { return json::array({v.x(), v.y(), v.z()}); };
-  json j;
-  j["file"] = s.file.string();
-  j["solver"] = {{"particle_radius", s.solver.particle_radius}, {"support_factor", s.solver.support_factor},
-                 {"iterations", s.solver.iterations},           {"max_iterations", s.solver.max_iterations},
-                 {"max_density_error", s.solver.max_density_error}, {"max_dt", s.solver.max_dt},
-                 {"cfl", s.solver.cfl},                         {"max_substeps", s.solver.max_substeps},
-                 {"gravity", v3(s.solver.gravity)},             {"rest_density", s.solver.rest_density},
-                 {"viscosity", s.solver.viscosity},             {"vorticity", s.solver.vorticity},
-                 {"epsilon", s.solver.epsilon},                 {"scorr_k", s.solver.scorr_k},
-                 {"scorr_n", s.solver.scorr_n},                 {"scorr_dq", s.solver.scorr_dq},
-                 {"surface_tension", s.solver.surface_tension}, {"surface_tension_samples", s.solver.surface_tension_samples},
-                 {"drag", s.solver.drag},                       {"air_density", s.solver.air_density}};
-  j["domain"] = {{"min", v3(s.domain.min)}, {"max", v3(s.domain.max)}};
-  j["fluid"] = json::array();
-  for (const auto& f : s.fluid) {
-    if (f.shape == sim::FluidSource::Shape::Box)
-      j["fluid"].push_back({{"shape", "box"}, {"min", v3(f.min)}, {"max", v3(f.max)}, {"velocity", v3(f.velocity)}});
-    else
-      j["fluid"].push_back({{"shape", "sphere"}, {"center", v3(f.center)}, {"radius", f.radius}, {"velocity", v3(f.velocity)}});
-  }
-  j["targets"] = json::array();
-  for (const auto& t : s.targets)
-    j["targets"].push_back({{"mesh", t.mesh.string()}, {"scale", v3(t.transform.scale)},
-                            {"rotate", v3(t.transform.rotate_deg)}, {"translate", v3(t.transform.translate)},
-                            {"start", t.start}, {"interpolation", t.smooth ? "smooth" : "linear"},
-                            {"keyframes", [&] {
-                              json k = json::array();
-                              for (const auto& key : t.keyframes)
-                                k.push_back({{"time", key.time}, {"translate", v3(key.translate)},
-                                             {"rotate", v3(key.rotate_deg)}, {"scale", key.scale}});
-                              return k;
-                            }()}});
-  j["output"] = {{"fps", s.output.fps}, {"frames", s.output.frames}, {"checkpoint_every", s.output.checkpoint_every},
-                 {"velocity", s.output.velocity}};
-  return j;
-}
-
 /// Mean wall-clock of the simulated frames (frame 0 is the initial state, not simulated).
 double mean_step_seconds(const std::vector<FrameRow>& rows) {
   double total = 0.0;
@@ -187,10 +149,6 @@ double mean_step_seconds(const std::vector<FrameRow>& rows) {
   for (const auto& r : rows)
     if (r.frame > 0) total += r.step_seconds, ++n;
   return n ? total / n : 0.0;
-}
-
-fs::path frame_path(const fs::path& out, int frame) {
-  return out / "particles" / fmt::format("frame_{:05d}.ply", frame);
 }
 
 Status write_frame(const fs::path& out, int frame, const sim::ParticleSet& p, bool velocity, float spacing,
@@ -203,7 +161,7 @@ Status write_frame(const fs::path& out, int frame, const sim::ParticleSet& p, bo
   view.positions = x;
   if (velocity) view.velocities = v;
   view.targets = t;
-  return io::write_particles_ply(frame_path(out, frame), view);
+  return io::write_particles_ply(io::frame_path(out, frame), view);
 }
 
 Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
@@ -243,10 +201,10 @@ bool formed_and_held(const std::vector<FrameRow>& rows, int window, int min_fram
 
 }  // namespace
 
-Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, core::Progress& progress) {
+Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt, core::Progress& progress) {
   const fs::path out = opt.out_dir;
   const fs::path ckpt_dir = out / "checkpoint", ckpt_file = ckpt_dir / "state.ffck";
-  io::Scene scene = scene_in;
+  scene::Scene scene = scene_in;
   if (opt.controller) scene.controller.name = *opt.controller;
   FF_CHECK(scene.controller.validate());
 
@@ -399,7 +357,8 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
     rep["fluidform_version"] = FF_VERSION;
     rep["status"] = status;
     if (!error.empty()) rep["error"] = error;
-    rep["scene"] = scene_to_json(scene);
+    rep["scene_file"] = scene.file.string();
+    rep["scene"] = scene::scene_to_json(scene);  // every key the run used: run it again to reproduce the run
     rep["targets"] = targets_json;
     rep["totals"] = totals();
     FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics_csv(rows)));
@@ -476,7 +435,7 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   // particle frames just written; a failure here leaves the simulation's outputs as they are.
   if (opt.mesh) {
     std::vector<fs::path> files;
-    for (int k = 0; k <= last_frame; ++k) files.push_back(frame_path(out, k));
+    for (int k = 0; k <= last_frame; ++k) files.push_back(io::frame_path(out, k));
     MeshOptions mo;
     mo.spacing = scene.solver.spacing();
     mo.fps = scene.output.fps;
@@ -492,4 +451,4 @@ Result<RunSummary> run_scene(const io::Scene& scene_in, const RunOptions& opt, c
   return sum;
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -1,6 +1,6 @@
-#include "app/live_scene.h"
+#include "pipeline/live_scene.h"
 
-#include "app/targets.h"
+#include "pipeline/target_cache.h"
 #include "control/steering.h"
 #include "core/timer.h"
 #include "io/atomic_file.h"
@@ -12,10 +12,10 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 
-Result<std::unique_ptr<LiveScene>> LiveScene::create(const io::Scene& scene_in, const LiveOptions& options,
+Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_in, const LiveOptions& options,
                                                      core::Progress& progress) {
   std::unique_ptr<LiveScene> s(new LiveScene());
   s->scene_ = scene_in;
@@ -148,4 +148,4 @@ Status LiveScene::set_mesh(std::size_t t, std::size_t mesh, core::Progress& prog
   return {};
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

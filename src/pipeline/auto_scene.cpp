@@ -1,4 +1,4 @@
-#include "app/auto_scene.h"
+#include "pipeline/auto_scene.h"
 
 #include "io/load_mesh.h"
 #include "sampling/mesh_field.h"
@@ -12,9 +12,9 @@
 #include <cmath>
 #include <numeric>
 
-namespace ff::app {
+namespace ff::pipeline {
 
-Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene) {
+Result<std::vector<TargetGeometry>> load_targets(const scene::Scene& scene) {
   std::vector<TargetGeometry> out;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     io::MeshLoadStats st;
@@ -36,7 +36,7 @@ Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene) {
   return out;
 }
 
-Status complete_scene(io::Scene& s, std::vector<TargetGeometry>& targets) {
+Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   if (targets.empty()) return {};
   double volume = 0.0, area = 0.0;
   for (const auto& t : targets) volume += t.volume, area += t.area;
@@ -96,7 +96,7 @@ Status complete_scene(io::Scene& s, std::vector<TargetGeometry>& targets) {
       const auto& t = targets[k];
       box.extend(t.box.min), box.extend(t.box.max);
       // A keyframed target sweeps a path: the domain holds its box at every keyframe.
-      const control::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth, 0.5f * (t.box.min + t.box.max)};
+      const control::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth(), 0.5f * (t.box.min + t.box.max)};
       for (const auto& key : motion.keys) {
         const control::Pose pose = motion.at(key.time);
         for (int c = 0; c < 8; ++c)
@@ -154,4 +154,4 @@ void assign_targets(sim::ParticleSet& p, const std::vector<TargetGeometry>& targ
   }
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -1,4 +1,6 @@
-#include "app/mesh_export.h"
+#include "pipeline/mesh_export.h"
+
+#include "io/particle_frames.h"
 
 #include "core/neighbor_grid.h"
 #include "core/timer.h"
@@ -17,22 +19,10 @@
 #include <cmath>
 #include <string_view>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 
 namespace {
-
-// frame_NNNNN.ply → NNNNN; −1 for other names. (By hand: GCC 12's <regex> trips -Wmaybe-uninitialized at -O1.)
-long frame_number(const fs::path& p) {
-  const std::string name = p.filename().string();
-  constexpr std::string_view head = "frame_", tail = ".ply";
-  if (name.size() <= head.size() + tail.size() || name.rfind(head, 0) != 0 ||
-      name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
-    return -1;
-  const std::string digits = name.substr(head.size(), name.size() - head.size() - tail.size());
-  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
-  return std::stol(digits);
-}
 
 // "spacing D" in a particle PLY's header comments (written by `run`), or 0.
 float spacing_from_comments(const io::ParticleFrame& f) {
@@ -55,23 +45,6 @@ Status MeshOptions::validate() const {
   if (every < 1) return param_error(fmt::format("mesh: --every {} must be ≥ 1", every));
   if (!(fps > 0.0) || !std::isfinite(fps)) return param_error(fmt::format("mesh: fps {} must be > 0", fps));
   return {};
-}
-
-Result<std::vector<fs::path>> particle_frames(const fs::path& input) {
-  std::error_code ec;
-  if (!fs::exists(input, ec)) return input_error(fmt::format("{}: no such file or folder", input.string()));
-  if (!fs::is_directory(input, ec)) return std::vector<fs::path>{input};
-  fs::path dir = input;
-  if (fs::is_directory(input / "particles", ec)) dir = input / "particles";
-  std::vector<std::pair<long, fs::path>> found;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (const long k = frame_number(e.path()); k >= 0 && e.is_regular_file(ec)) found.emplace_back(k, e.path());
-  if (ec) return io_error(fmt::format("{}: {}", dir.string(), ec.message()));
-  if (found.empty()) return input_error(fmt::format("{}: no particle frames (frame_NNNNN.ply) in it", dir.string()));
-  std::sort(found.begin(), found.end());
-  std::vector<fs::path> out;
-  for (auto& [k, p] : found) out.push_back(std::move(p));
-  return out;
 }
 
 Result<float> estimate_spacing(std::span<const Vec3f> points) {
@@ -165,7 +138,7 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     } else {
       meshes[c] = std::move(*mesh);
       if (o.frame_objs && !o.final_only) {
-        const long k = frame_number(file);
+        const long k = io::frame_number(file);
         const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
         if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string())); !st.ok())
           failed[c] = 1, errors[c] = st.error();
@@ -200,7 +173,7 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     g.fps = o.fps;
     g.quantize = o.quantize;
     for (std::size_t c : chosen) {
-      const long k = frame_number(frames[c]);
+      const long k = io::frame_number(frames[c]);
       g.times.push_back(double(k >= 0 ? k : static_cast<long>(c)) / o.fps);
     }
     FF_CHECK(io::write_glb(out / "animation.glb", meshes, g));
@@ -236,4 +209,4 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   return sum;
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

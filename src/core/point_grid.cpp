@@ -1,10 +1,10 @@
-#include "metrics/point_grid.h"
+#include "core/point_grid.h"
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 
-namespace ff::metrics {
+namespace ff::core {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -100,4 +100,4 @@ std::size_t PointGrid::bytes() const {
   return sizeof(*this) + start_.capacity() * sizeof(Index) + points_.capacity() * sizeof(Vec3f);
 }
 
-}  // namespace ff::metrics
+}  // namespace ff::core

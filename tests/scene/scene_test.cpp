@@ -1,11 +1,10 @@
 // Scene files: defaults, unknown keys with "did you mean", ranges naming key/value/range, types.
-#include "io/scene.h"
+#include "scene/scene.h"
 
-#include "io/json_reader.h"
 
 #include <gtest/gtest.h>
 
-namespace ff::io {
+namespace ff::scene {
 namespace {
 
 constexpr const char* kMinimal = R"({"fluid":[{"shape":"box","min":[0,0,0],"max":[0.5,0.5,0.5]}]})";
@@ -96,12 +95,12 @@ TEST(Scene, TargetOnlySceneControllerKeyframesAndMorphParse) {
   EXPECT_TRUE(s->fluid.empty());
   EXPECT_TRUE(s->auto_radius && s->auto_domain && s->auto_frames);
   ASSERT_EQ(s->targets[0].keyframes.size(), 2u);
-  EXPECT_TRUE(s->targets[0].smooth);
+  EXPECT_TRUE(s->targets[0].smooth());
   EXPECT_FLOAT_EQ(s->targets[0].keyframes[1].scale, 1.5f);
   ASSERT_EQ(s->targets[0].swaps.size(), 1u);
   EXPECT_EQ(s->targets[0].swaps[0].mesh, std::filesystem::path("/base/b.obj"));
-  EXPECT_FALSE(s->controller.adaptive.gather);
-  EXPECT_EQ(s->controller.adaptive.bond_radius, control::BondRadius::Paper);
+  EXPECT_FALSE(s->controller.get<control::AdaptiveParams>().gather);
+  EXPECT_EQ(s->controller.get<control::AdaptiveParams>().bond_radius, control::BondRadius::Paper);
 }
 
 TEST(Scene, BadControllerKeyframeAndMorphEntriesAreOneLineErrors) {
@@ -139,11 +138,5 @@ TEST(Scene, MissingFileAndFolderAreInputErrors) {
   EXPECT_FALSE(load_scene("/tmp").has_value());
 }
 
-TEST(JsonReader, ClosestKey) {
-  EXPECT_EQ(closest_key("iteratons", {"iterations", "cfl"}), "iterations");
-  EXPECT_EQ(closest_key("xyz", {"iterations", "cfl"}), "");
-  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);
-}
-
 }  // namespace
-}  // namespace ff::io
+}  // namespace ff::scene

@@ -2,13 +2,13 @@
 // Drives the stages for `fluidform run`: the only place where scene, meshes, solver and writers meet.
 #include "core/error.h"
 #include "core/progress.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 
 #include <filesystem>
 #include <optional>
 #include <string>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 struct RunOptions {
   std::filesystem::path out_dir = "fluidform-out";
@@ -38,6 +38,6 @@ struct RunSummary {
 };
 
 /// Runs the scene into `options.out_dir`. Everything already written stays valid on any error.
-Result<RunSummary> run_scene(const io::Scene& scene, const RunOptions& options, core::Progress& progress);
+Result<RunSummary> run_scene(const scene::Scene& scene, const RunOptions& options, core::Progress& progress);
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -1,15 +1,15 @@
 // The live scene behind `fluidform serve`: steps frame by frame, steers a target (the error rate is then measured
 // against the moved target, and the pose is kept inside the domain), switches controllers, swaps the mesh for
 // another from the list, and restarts — on a small sphere so that it runs in seconds.
-#include "app/live_scene.h"
-#include "io/scene.h"
+#include "pipeline/live_scene.h"
+#include "scene/scene.h"
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace {
 namespace fs = std::filesystem;
 
@@ -17,7 +17,7 @@ TEST(LiveScene, StepSteerSwitchSwapRestart) {
   const fs::path dir = test::temp_dir("live-scene");
   test::write_obj(dir / "sphere.obj", test::sphere_mesh(1.0f, 3));
   test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.8f, -0.8f, -0.8f), Vec3f(0.8f, 0.8f, 0.8f)));
-  auto scene = io::parse_scene(R"({"targets": [{"mesh": "sphere.obj", "scale": 0.15}], "sampling": {"auto_count": 600}})",
+  auto scene = scene::parse_scene(R"({"targets": [{"mesh": "sphere.obj", "scale": 0.15}], "sampling": {"auto_count": 600}})",
                                dir);
   ASSERT_TRUE(scene) << scene.error().message;
   LiveOptions lo;
@@ -87,4 +87,4 @@ TEST(LiveScene, StepSteerSwitchSwapRestart) {
 }
 
 }  // namespace
-}  // namespace ff::app
+}  // namespace ff::pipeline

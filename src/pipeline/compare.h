@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 struct CompareOptions {
   std::filesystem::path scene_file;
@@ -90,4 +90,4 @@ Result<ChildExit> run_child(const std::vector<std::string>& argv, const std::fil
 /// "model name" of /proc/cpuinfo ("unknown CPU" when not there).
 std::string cpu_model();
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -1,10 +1,10 @@
-#include "metrics/point_tree.h"
+#include "core/point_tree.h"
 
 #include <algorithm>
 #include <cassert>
 #include <numeric>
 
-namespace ff::metrics {
+namespace ff::core {
 namespace {
 
 // Squared distance from q to the box [lo, hi] (0 inside).
@@ -107,4 +107,4 @@ std::size_t PointTree::bytes() const {
          order_.capacity() * sizeof(Index);
 }
 
-}  // namespace ff::metrics
+}  // namespace ff::core

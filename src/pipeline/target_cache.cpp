@@ -1,4 +1,4 @@
-#include "app/targets.h"
+#include "pipeline/target_cache.h"
 
 #include "io/load_mesh.h"
 #include "sampling/control_io.h"
@@ -11,7 +11,7 @@
 #include <fstream>
 #include <iterator>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
@@ -29,7 +29,7 @@ void put_vec(std::vector<std::uint8_t>& b, const Vec3f& v) {
 
 }  // namespace
 
-Result<std::uint64_t> sampling_key(const io::TargetSpec& target, const sampling::SamplingParams& p) {
+Result<std::uint64_t> sampling_key(const scene::TargetSpec& target, const sampling::SamplingParams& p) {
   std::ifstream in(target.mesh, std::ios::binary);
   if (!in) return input_error(fmt::format("{}: cannot open the target mesh", target.mesh.string()));
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -55,7 +55,7 @@ Result<std::uint64_t> sampling_key(const io::TargetSpec& target, const sampling:
   return sim::fnv1a(b, h);
 }
 
-Result<TargetControls> prepare_target(const io::TargetSpec& target, const sampling::SamplingParams& params,
+Result<TargetControls> prepare_target(const scene::TargetSpec& target, const sampling::SamplingParams& params,
                                       std::uint8_t id, const fs::path& cache_dir, core::Progress& progress) {
   FF_TRY(const std::uint64_t key, sampling_key(target, params));
   TargetControls out;
@@ -80,4 +80,4 @@ Result<TargetControls> prepare_target(const io::TargetSpec& target, const sampli
   return out;
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

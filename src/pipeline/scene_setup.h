@@ -3,12 +3,12 @@
 // (sampled or from the cache), its metric shapes over time (mesh swaps included) and its motion; and the
 // per-frame shape metrics of all targets, N_c-weighted into one row. Factored out of run_pipeline.cpp so that
 // the live viewer (app/live_scene.h) steps exactly the scene a run would.
-#include "app/auto_scene.h"
+#include "pipeline/auto_scene.h"
 #include "control/control_targets.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 #include "metrics/shape_metrics.h"
 #include "sim/particle_set.h"
 
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 /// A target's shapes over time: its mesh, then each swapped-in mesh from its time on.
 struct TargetShapes {
@@ -34,7 +34,7 @@ struct TargetShapes {
 
 /// The sampling parameters of a scene's targets: the scene's, with the spacing defaulting to the fluid spacing d
 /// (METHOD §0: d_c = d) and the controls calibrated to the fluid's rest density.
-sampling::SamplingParams target_sampling(const io::Scene& scene);
+sampling::SamplingParams target_sampling(const scene::Scene& scene);
 
 /// Target `t` of `scene` as another mesh (a morph's, or the live viewer's swap): its control particles, sampled
 /// with the target's transform (or from `cache_dir`), and its metric shape. Errors of loading the mesh or building
@@ -43,7 +43,7 @@ struct MeshPhase {
   sampling::ControlSet set;
   metrics::TargetShape shape;
 };
-Result<MeshPhase> prepare_mesh(const io::Scene& scene, std::size_t t, const std::filesystem::path& mesh,
+Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const std::filesystem::path& mesh,
                                const std::filesystem::path& cache_dir, core::Progress& progress,
                                const std::string& where = "");
 
@@ -58,7 +58,7 @@ struct PreparedTargets {
 
 /// Samples (or loads from `cache_dir`) every target of `scene` (completed by complete_scene, `geometry` from
 /// load_targets) and its mesh swaps. Errors name the target.
-Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vector<TargetGeometry>& geometry,
+Result<PreparedTargets> prepare_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const std::filesystem::path& cache_dir,
                                         const std::filesystem::path& report_dir, core::Progress& progress);
 
@@ -74,4 +74,4 @@ struct ShapeMeasure {
 ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,
                              double time, const sim::ParticleSet& p, float r, std::vector<std::uint8_t>& controlled);
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -18,7 +18,7 @@
 #include <span>
 #include <vector>
 
-namespace ff::metrics {
+namespace ff::core {
 
 class PointTree {
  public:
@@ -61,4 +61,4 @@ class PointTree {
   std::vector<Index> order_;  // tree order -> input index
 };
 
-}  // namespace ff::metrics
+}  // namespace ff::core

@@ -1,6 +1,6 @@
-#include "app/scene_setup.h"
+#include "pipeline/scene_setup.h"
 
-#include "app/targets.h"
+#include "pipeline/target_cache.h"
 #include "io/load_mesh.h"
 
 #include <fmt/format.h>
@@ -8,20 +8,20 @@
 
 #include <cmath>
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-sampling::SamplingParams target_sampling(const io::Scene& scene) {
+sampling::SamplingParams target_sampling(const scene::Scene& scene) {
   sampling::SamplingParams sp = scene.sampling;
   if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
   sp.rest_density = scene.solver.rest_density;
   return sp;
 }
 
-Result<MeshPhase> prepare_mesh(const io::Scene& scene, std::size_t t, const fs::path& mesh_path, const fs::path& cache_dir,
+Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const fs::path& mesh_path, const fs::path& cache_dir,
                                core::Progress& progress, const std::string& where) {
-  io::TargetSpec spec = scene.targets[t];
+  scene::TargetSpec spec = scene.targets[t];
   spec.mesh = mesh_path;
   FF_TRY(TargetControls tc, prepare_target(spec, target_sampling(scene), static_cast<std::uint8_t>(t), cache_dir, progress));
   const auto fail = [&](const Error& e) {
@@ -35,7 +35,7 @@ Result<MeshPhase> prepare_mesh(const io::Scene& scene, std::size_t t, const fs::
   return MeshPhase{std::move(tc.set), std::move(*shape)};
 }
 
-Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vector<TargetGeometry>& geometry,
+Result<PreparedTargets> prepare_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const fs::path& cache_dir, const fs::path& report_dir,
                                         core::Progress& progress) {
   PreparedTargets out;
@@ -60,7 +60,7 @@ Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vecto
     // Mesh swaps (morph): each swapped-in mesh is sampled (and cached) like a target of its own.
     std::vector<std::pair<double, sampling::ControlSet>> swaps;
     for (std::size_t k = 0; k < scene.targets[i].swaps.size(); ++k) {
-      const io::TargetSpec::Swap& swap = scene.targets[i].swaps[k];
+      const scene::TargetSpec::Swap& swap = scene.targets[i].swaps[k];
       FF_TRY(MeshPhase sw, prepare_mesh(scene, i, swap.mesh, cache_dir, progress, fmt::format("targets[{}].morph[{}]", i, k)));
       spdlog::info("target {}: becomes {} at t = {} s ({} control particles)", i, swap.mesh.filename().string(), swap.time,
                    sw.set.size());
@@ -69,7 +69,7 @@ Result<PreparedTargets> prepare_targets(const io::Scene& scene, const std::vecto
       swaps.emplace_back(swap.time, std::move(sw.set));
     }
     out.shapes.push_back(std::move(ts));
-    control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth,
+    control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth(),
                                  0.5f * (geometry[i].box.min + geometry[i].box.max)};
     out.motions.push_back(motion);
     out.controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion, std::move(swaps)});
@@ -103,4 +103,4 @@ ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std:
   return out;
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -1,10 +1,10 @@
-#include "app/compare.h"
+#include "pipeline/compare.h"
 
 #include "control/registry.h"
 #include "core/parallel.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 #include "metrics/summary.h"
 
 #include <fmt/format.h>
@@ -28,7 +28,7 @@
 
 extern char** environ;
 
-namespace ff::app {
+namespace ff::pipeline {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -134,7 +134,7 @@ struct RunSetup {
 };
 
 // Runs one controller in its own process into `dir` and reads its row from report.json and metrics.csv.
-Result<CompareRow> run_controller(const RunSetup& setup, const control::RegistryEntry& entry, const fs::path& dir) {
+Result<CompareRow> run_controller(const RunSetup& setup, const control::ControllerInfo& entry, const fs::path& dir) {
   CompareRow row;
   row.controller = std::string(entry.name);
   row.approximation = entry.approximation;
@@ -168,8 +168,8 @@ Result<CompareRow> run_controller(const RunSetup& setup, const control::Registry
   return row;
 }
 
-Result<std::vector<const control::RegistryEntry*>> resolve_controllers(const std::vector<std::string>& names) {
-  std::vector<const control::RegistryEntry*> out;
+Result<std::vector<const control::ControllerInfo*>> resolve_controllers(const std::vector<std::string>& names) {
+  std::vector<const control::ControllerInfo*> out;
   if (names.empty()) {
     for (const auto& e : control::registry()) out.push_back(&e);
     return out;
@@ -191,7 +191,7 @@ Result<fs::path> resolve_exe(const fs::path& given) {
 }
 
 // A missing mesh would fail every controller the same way: bad input, refused before anything runs.
-Status check_meshes(const io::Scene& scene) {
+Status check_meshes(const scene::Scene& scene) {
   std::error_code ec;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     std::vector<fs::path> meshes{scene.targets[i].mesh};
@@ -402,7 +402,7 @@ Result<CompareTable> table_from_json(const json& j) {
 Result<CompareTable> run_compare(const CompareOptions& o) {
   // Everything is checked before the output folder is touched.
   FF_TRY(const auto entries, resolve_controllers(o.controllers));
-  FF_TRY(const io::Scene scene, io::load_scene(o.scene_file));
+  FF_TRY(const scene::Scene scene, scene::load_scene(o.scene_file));
   if (scene.targets.empty())
     return input_error(fmt::format("{}: the scene has no targets, so there is no shape to compare controllers on",
                                    o.scene_file.string()));
@@ -435,4 +435,4 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   return table;
 }
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -8,7 +8,7 @@
 //                     target, so the formed shape is held by the control, not by the floor.
 // Mesh units are metres whatever the model's size. Given keys are never overridden.
 #include "core/error.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 #include "io/triangle_mesh.h"
 #include "sampling/mesh_field.h"
 #include "sim/particle_set.h"
@@ -16,7 +16,7 @@
 #include <optional>
 #include <vector>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 /// A target mesh in its scene pose, with what the layout needs.
 struct TargetGeometry {
@@ -28,16 +28,16 @@ struct TargetGeometry {
 };
 
 /// Loads every target with its transform. Errors name the target.
-Result<std::vector<TargetGeometry>> load_targets(const io::Scene& scene);
+Result<std::vector<TargetGeometry>> load_targets(const scene::Scene& scene);
 
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
 /// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at
 /// the sampling spacing, sparse-sampling drops removed), which is what the fluid is sized and shared by.
-Status complete_scene(io::Scene& scene, std::vector<TargetGeometry>& targets);
+Status complete_scene(scene::Scene& scene, std::vector<TargetGeometry>& targets);
 
 /// Shares the fluid out among the targets by volume (METHOD: "fluid is shared out by volume"): target t gets
 /// round(N V_t / ΣV) particles, the ones nearest its centre among those not yet taken, larger targets first.
 /// One target: every particle. No targets: all stay free (kFreeFluid).
 void assign_targets(sim::ParticleSet& particles, const std::vector<TargetGeometry>& targets);
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

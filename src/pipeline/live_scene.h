@@ -3,13 +3,13 @@
 // and sampled exactly as `fluidform run` does (app/scene_setup.h), then steered between frames — a target moved or
 // rotated (control/steering.h), its mesh swapped for another of the scene's meshes, the controller switched, the run
 // restarted. Not thread-safe: one thread (the server's simulation thread) owns it.
-#include "app/auto_scene.h"
-#include "app/scene_setup.h"
+#include "pipeline/auto_scene.h"
+#include "pipeline/scene_setup.h"
 #include "control/registry.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "io/scene.h"
+#include "scene/scene.h"
 #include "sim/particle_set.h"
 #include "sim/pbf_solver.h"
 
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 struct LiveOptions {
   std::filesystem::path cache_dir = "fluidform-out/cache";  ///< control-particle cache (shared with `run`'s default)
@@ -53,7 +53,7 @@ struct LiveTarget {
 
 class LiveScene {
  public:
-  static Result<std::unique_ptr<LiveScene>> create(const io::Scene& scene, const LiveOptions& options,
+  static Result<std::unique_ptr<LiveScene>> create(const scene::Scene& scene, const LiveOptions& options,
                                                    core::Progress& progress);
 
   /// Advances one frame of 1/fps s. Errors: the solver's (a non-finite particle).
@@ -73,7 +73,7 @@ class LiveScene {
   /// The scene's meshes: every target's and every mesh swap's, once each, then LiveOptions::extra_meshes.
   const std::vector<std::filesystem::path>& meshes() const { return meshes_; }
   std::string controller_name() const;
-  const io::Scene& scene() const { return scene_; }
+  const scene::Scene& scene() const { return scene_; }
   double time() const { return time_; }
   int frame() const { return frame_; }
   double fps() const { return scene_.output.fps; }
@@ -82,7 +82,7 @@ class LiveScene {
   LiveScene() = default;
   Status rebuild_controller();
 
-  io::Scene scene_;
+  scene::Scene scene_;
   LiveOptions options_;
   std::vector<TargetGeometry> geometry_;
   std::vector<control::ControlTarget> controls_;  // master copy: a controller is made from a copy
@@ -99,4 +99,4 @@ class LiveScene {
   int frame_ = 0;
 };
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

@@ -16,7 +16,7 @@
 #include <span>
 #include <vector>
 
-namespace ff::app {
+namespace ff::pipeline {
 
 struct MeshOptions {
   surface::SurfaceParams params;
@@ -43,14 +43,10 @@ struct MeshSummary {
   double seconds = 0.0;      ///< wall time of the whole export
 };
 
-/// The particle frames of `input`: one PLY file, a folder of frame_NNNNN.ply files, or a run's output folder
-/// (its particles/ folder), in frame order. Input error when there are none.
-Result<std::vector<std::filesystem::path>> particle_frames(const std::filesystem::path& input);
-
 /// Median nearest-neighbour distance of (up to 4096 of) the points: the spacing of a fluid near rest.
 Result<float> estimate_spacing(std::span<const Vec3f> points);
 
 Result<MeshSummary> export_meshes(std::span<const std::filesystem::path> frames, const std::filesystem::path& out,
                                   const MeshOptions& options, core::Progress& progress);
 
-}  // namespace ff::app
+}  // namespace ff::pipeline

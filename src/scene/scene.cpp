@@ -1,0 +1,140 @@
+#include "scene/scene.h"
+
+#include "core/params.h"
+#include "io/json_reader.h"
+#include "scene/fields_json.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
+
+namespace ff::scene {
+namespace fs = std::filesystem;
+using io::JsonObject;
+using nlohmann::json;
+
+Status TargetSpec::validate(std::string_view p) const {
+  FF_CHECK(core::validate_fields(*this, p));
+  FF_CHECK((control::TargetMotion{keyframes, smooth(), Vec3f::Zero()}.validate(p)));
+  for (std::size_t k = 1; k < swaps.size(); ++k)
+    if (!(swaps[k].time > swaps[k - 1].time))
+      return param_error(fmt::format("{}.morph[{}].time = {} must be later than the swap before it ({})", p, k,
+                                     swaps[k].time, swaps[k - 1].time));
+  return {};
+}
+
+Status Scene::validate() const {
+  FF_CHECK(solver.validate());
+  FF_CHECK(domain.validate(solver.particle_radius));
+  FF_CHECK(output.validate());
+  FF_CHECK(sampling.validate());
+  for (std::size_t i = 0; i < fluid.size(); ++i) FF_CHECK(fluid[i].validate(fmt::format("fluid[{}]", i)));
+  for (std::size_t i = 0; i < targets.size(); ++i) FF_CHECK(targets[i].validate(fmt::format("targets[{}]", i)));
+  FF_CHECK(controller.validate());
+  if (fluid.empty() && targets.empty())
+    return param_error("scene has no fluid: add a \"fluid\" list with at least one box or sphere source");
+  return {};
+}
+
+namespace {
+
+// A fluid source needs the fields of its shape (a box its corners, a sphere its centre and radius); the field list
+// cannot say so, as what is required depends on another field.
+Status check_fluid_shapes(const json& fluid) {
+  if (!fluid.is_array()) return {};
+  for (std::size_t i = 0; i < fluid.size(); ++i) {
+    const json& f = fluid[i];
+    if (!f.is_object()) continue;  // the reader names the type error
+    sim::FluidSource src;
+    if (f.contains("shape")) {
+      if (!f["shape"].is_string()) continue;
+      const auto shape = core::find_choice<sim::FluidSource::Shape>(f["shape"].get<std::string>());
+      if (!shape) continue;  // the reader names the unknown shape
+      src.shape = *shape;
+    }
+    const auto need = sim::FluidSource::required_for(src.shape);
+    if (!f.contains(need[0]) || !f.contains(need[1]))
+      return param_error(fmt::format("fluid[{}]: a {} needs \"{}\" and \"{}\"", i, core::choice_name(src.shape), need[0],
+                                     need[1]));
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::string_view source_name) {
+  json j = json::parse(text, nullptr, /*allow_exceptions=*/false, /*ignore_comments=*/true);
+  if (j.is_discarded()) {
+    // Re-parse with exceptions only to get the position of the syntax error for the message.
+    try {
+      [[maybe_unused]] const json again = json::parse(text, nullptr, true, true);
+    } catch (const json::parse_error& e) {
+      std::string what = e.what();
+      const auto colon = what.find("parse error");
+      return param_error(fmt::format("{}: invalid JSON: {}", source_name, colon == std::string::npos ? what : what.substr(colon)));
+    }
+    return param_error(fmt::format("{}: invalid JSON", source_name));
+  }
+  Scene s;
+  JsonObject root(j, "");
+  FF_CHECK(root.check_object());
+  if (const auto it = j.find("fluid"); it != j.end()) FF_CHECK(check_fluid_shapes(*it));
+  FF_CHECK(read_fields(root, s, base_dir));
+  FF_CHECK(root.finish());
+  const auto given = [&](const char* block, const char* key) {
+    const auto it = j.find(block);
+    return it != j.end() && it->is_object() && (key == nullptr || it->contains(key));
+  };
+  s.auto_radius = !given("solver", "particle_radius");
+  s.auto_domain = !given("domain", nullptr);
+  s.auto_frames = !given("output", "frames");
+  FF_CHECK(s.validate());
+  // The resume hash covers everything that shapes the simulation; the frame count may change between runs.
+  json h = j;
+  if (h.contains("output") && h["output"].is_object()) {
+    h["output"].erase("frames");
+    if (h["output"].empty()) h.erase("output");
+  }
+  const std::string dumped = h.dump();
+  std::uint64_t hash = 14695981039346656037ull;
+  for (unsigned char c : dumped) hash = (hash ^ c) * 1099511628211ull;
+  s.hash = hash;
+  return s;
+}
+
+json scene_to_json(const Scene& scene) {
+  json j = fields_to_json(scene);
+  if (scene.auto_frames) j["output"].erase("frames");
+  return j;
+}
+
+std::vector<core::KeyRow> scene_keys() {
+  std::vector<core::KeyRow> rows;
+  core::key_rows<Scene>("", rows);
+  return rows;
+}
+
+std::string scene_keys_markdown() {
+  std::string s = "| key | type | default | range | what |\n| --- | --- | --- | --- | --- |\n";
+  for (const auto& r : scene_keys())
+    s += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.key, r.type, r.default_value, r.range, r.doc);
+  return s;
+}
+
+Result<Scene> load_scene(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return input_error(fmt::format("{}: no such scene file", file.string()));
+  if (fs::is_directory(file, ec)) return input_error(fmt::format("{}: is a folder, not a scene file", file.string()));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return input_error(fmt::format("{}: cannot read the scene file", file.string()));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  FF_TRY(Scene s, parse_scene(ss.str(), base, file.string()));
+  s.file = file;
+  return s;
+}
+
+}  // namespace ff::scene

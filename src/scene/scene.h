@@ -1,0 +1,142 @@
+#pragma once
+// Scene files (JSON) → a tree of every stage's parameter structs (DESIGN.md "Scene"), and back.
+//
+// {
+//   "solver":  { SolverParams fields },                       see sim/solver_params.h
+//   "domain":  { "min": [x,y,z], "max": [x,y,z] },            metres
+//   "fluid":   [ {"shape": "box", "min": [..], "max": [..], "velocity": [..]},
+//                {"shape": "sphere", "center": [..], "radius": R, "velocity": [..]} ],
+//   "targets": [ {"mesh": PATH, "scale": S or [sx,sy,sz], "rotate": [deg x,y,z], "translate": [..], "start": T,
+//                 "keyframes": [...], "interpolation": "linear", "morph": [{"time": T, "mesh": PATH}]} ],
+//   "output":  { "fps": 60, "frames": 120, "checkpoint_every": 10, "velocity": true },
+//   "sampling": { SamplingParams fields },                    see sampling/sampling_params.h
+//   "controller": { "name": "adaptive", "adaptive": { AdaptiveParams fields }, ... }   see control/registry.h
+// }
+// Every struct's keys come from its one field list (core/fields.h); `fluidform keys` prints them all with their
+// defaults and ranges. A scene with targets may leave out the particle radius, the domain and the fluid: the
+// pipeline then sizes them from the targets (pipeline/auto_scene.h), which is what the `auto_*` flags record.
+// Unknown keys are errors naming the JSON path and the closest valid key; out-of-range values name the key, the
+// value and the range. Mesh paths are relative to the scene file.
+#include "control/registry.h"
+#include "control/target_motion.h"
+#include "core/error.h"
+#include "core/fields.h"
+#include "io/load_mesh.h"
+#include "sampling/sampling_params.h"
+#include "sim/solver_params.h"
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ff::scene {
+
+enum class Interpolation { Linear, Smooth };
+constexpr std::array<core::Choice<Interpolation>, 2> field_choices(Interpolation) {
+  return {{{Interpolation::Linear, "linear"}, {Interpolation::Smooth, "smooth"}}};
+}
+
+/// One target mesh of the scene.
+struct TargetSpec {
+  std::filesystem::path mesh;  ///< resolved against the scene file's folder
+  io::MeshTransform transform; ///< scale, rotate (degrees), translate — applied in that order
+  float start = 0.0f;          ///< s, when the target starts to attract fluid. [0, 1e6]
+  /// Keyframed motion after the transform (translate/rotate/scale about the target's centre), see
+  /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
+  std::vector<control::Keyframe> keyframes;
+  Interpolation interpolation = Interpolation::Linear;  ///< between keyframes: linear, or smoothstep ("smooth")
+  /// Mesh swaps, "morph": [{"time": T, "mesh": PATH}, ...]: from T on the target is that mesh (same transform).
+  struct Swap {
+    double time = 0.0;
+    std::filesystem::path mesh;
+    template <class S, class F>
+    static void fields(S& s, F&& f) {
+      f("time", s.time, core::required(core::closed(0.0, 1e6, "s; later than the swap before it")));
+      f("mesh", s.mesh, core::required(core::plain("the mesh the target becomes")));
+    }
+  };
+  std::vector<Swap> swaps;
+
+  bool smooth() const { return interpolation == Interpolation::Smooth; }
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("mesh", s.mesh, required(plain("the target mesh (OBJ, PLY, STL, glTF, FBX, ...), relative to the scene")));
+    f("scale", s.transform.scale, scalar_ok(closed(1e-9, 1e9, "per-axis factor, or one for all three")));
+    f("rotate", s.transform.rotate_deg, closed(-1e6, 1e6, "degrees about x, y, z (in that order)"));
+    f("translate", s.transform.translate, closed(-1e9, 1e9, "m"));
+    f("start", s.start, closed(0.0, 1e6, "s, when the target starts to attract fluid"));
+    f("keyframes", s.keyframes, plain("keyframed motion about the target's centre"));
+    f("interpolation", s.interpolation, plain("between keyframes"));
+    f("morph", s.swaps, plain("mesh swaps: from each time on the target is that mesh"));
+  }
+  Status validate(std::string_view path) const;
+};
+
+struct OutputParams {
+  double fps = 60.0;          ///< output frames per simulated second. [1, 1000]
+  int frames = 120;           ///< output frames to simulate (frame 0 is the initial state). [1, 10^7]
+  int checkpoint_every = 10;  ///< write a checkpoint every K frames; 0 = never. [0, 10^7]
+  bool velocity = true;       ///< write vx vy vz into the particle PLY files
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("fps", s.fps, closed(1.0, 1000.0, "output frames per simulated second"));
+    f("frames", s.frames, closed(1, 1e7, "frames to simulate (default with targets: until formed)"));
+    f("checkpoint_every", s.checkpoint_every, closed(0, 1e7, "a checkpoint every K frames; 0 = never"));
+    f("velocity", s.velocity, plain("write vx vy vz into the particle PLY files"));
+  }
+  Status validate(std::string_view path = "output") const { return core::validate_fields(*this, path); }
+};
+
+struct Scene {
+  std::filesystem::path file;        ///< the scene file ("" when built in code)
+  sim::SolverParams solver;
+  sim::Domain domain;
+  std::vector<sim::FluidSource> fluid;
+  std::vector<TargetSpec> targets;
+  OutputParams output;
+  sampling::SamplingParams sampling;  ///< how targets become control particles (spacing 0 = the fluid spacing d)
+  control::ControllerSpec controller; ///< the shape controller ("adaptive" by default)
+  bool auto_radius = true;            ///< solver.particle_radius was not given: size it from the targets
+  bool auto_domain = true;            ///< domain was not given
+  bool auto_frames = true;            ///< output.frames was not given: with targets, run until formed (within a cap)
+  std::uint64_t hash = 0;            ///< content hash of the simulation-relevant settings (for --resume)
+
+  /// The scene file's top-level keys, each a struct with its own field list.
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    using namespace core;
+    f("solver", s.solver, plain("the PBF solver (sim/solver_params.h)"));
+    f("domain", s.domain, plain("the box the fluid lives in"));
+    f("fluid", s.fluid, plain("fluid sources: boxes and spheres on the particle lattice (default: from the targets)"));
+    f("targets", s.targets, plain("the target meshes"));
+    f("output", s.output, plain("what the run writes"));
+    f("sampling", s.sampling, plain("targets → control particles (sampling/sampling_params.h)"));
+    f("controller", s.controller, plain("the shape controller (control/registry.h)"));
+  }
+  /// Cross-field checks (every struct's validate(), fluid present, sources in the domain).
+  Status validate() const;
+};
+
+/// Parses scene JSON text. `base_dir` resolves relative mesh paths.
+Result<Scene> parse_scene(std::string_view json_text, const std::filesystem::path& base_dir,
+                          std::string_view source_name = "scene");
+/// Reads and parses a scene file. Errors name the file.
+Result<Scene> load_scene(const std::filesystem::path& file);
+
+/// The scene as a scene file: every key of every struct (mesh paths absolute), so that parsing it again gives the
+/// same scene from any folder. What the scene left automatic and the pipeline filled in (particle radius, domain,
+/// fluid) is written as filled in; an automatic run length stays automatic (output.frames left out).
+nlohmann::json scene_to_json(const Scene& scene);
+
+/// Every scene key with its type, default, range and one line ("fluidform keys", the README's table).
+std::vector<core::KeyRow> scene_keys();
+/// scene_keys() as a Markdown table.
+std::string scene_keys_markdown();
+
+}  // namespace ff::scene
