@@ -3,7 +3,8 @@
 // between them by their simulation times: at B's arrival the drawing shows A, and it reaches B when the next frame is
 // due (the frames' wall-clock spacing, smoothed), so it is never more than one frame behind the newest and never
 // ahead of it. A frame that cannot continue the pair (another particle count, time going back on a restart or a
-// playback loop, a jump far beyond the usual step) is shown as it is: both ends of the pair become that frame.
+// playback loop, a jump far beyond the usual step, or one the caller marks as a cut: the frame a seek asked for) is
+// shown as it is: both ends of the pair become that frame.
 // Plain ES module without DOM access (node's tests import it).
 
 export class FrameClock {
@@ -25,12 +26,13 @@ export class FrameClock {
 
   /**
    * A new frame at wall time `now` (ms). Returns true when it continues the pair (interpolate from the previous
-   * newest), false when it is shown as it is.
+   * newest), false when it is shown as it is. `cut`: the caller knows there is nothing in between (a seek's frame,
+   * however near the previous one).
    */
-  push(frame, now) {
+  push(frame, now, cut = false) {
     const prev = this.b;
     this.seq += 1;
-    let continues = prev !== null && frame.count === prev.count && frame.time > prev.time;
+    let continues = !cut && prev !== null && frame.count === prev.count && frame.time > prev.time;
     if (continues) {
       const dt = frame.time - prev.time;
       // A jump far beyond the usual step (a seek, frames dropped on a stall): no in-between to show.

@@ -5,7 +5,8 @@
 // to spheres when the measured frame time cannot hold the display rate), spheres, and the mesh. Orbit controls,
 // play/pause/restart, the controller switch, target dragging and mesh swaps, a HUD, and VR/AR buttons that enter an
 // immersive WebXR session where the browser supports one (asking for the headset's highest frame rate). In playback
-// (a finished run) the run's animation.glb plays in step with the particle frames.
+// (a finished run) the run's animation.glb plays in step with the particle frames, and a slider seeks (the frame it
+// asked for is drawn as it is, not interpolated from the frame before the jump).
 //
 // URL flags (for the browser test and for comparisons): ?look=liquid|spheres|mesh picks the look and turns the
 // automatic fall back off; ?decode=main receives and decodes frames on the main thread (the old path).
@@ -37,11 +38,13 @@ const state = {
   badFrames: 0,
   frame: null,           // header fields of the newest frame
   previousFrame: -1,     // frame number of the one received before it
-  history: [],           // {frame, time, error} of the last frames received (at most 4000)
+  history: [],           // {frame, time, error, continues} of the last frames received (at most 4000)
   poses: [],             // the server's last pose per target
   poseAcks: 0,
   errors: [],
-  animation: { loaded: false, duration: 0, clips: 0, meshes: 0, time: 0 },
+  animation: { loaded: false, duration: 0, clips: 0, meshes: 0, time: 0, clipTime: NaN },  // clipTime: the clip's own
+  // Playback seeks: how many sent, the last frame asked for, the one not arrived yet (null: none), frames that cut.
+  seek: { sent: 0, last: null, pending: null, cuts: 0 },
   renderedFrames: 0,     // display frames drawn
   decode: 'worker',      // where frames are received and decoded: 'worker' or 'main' (?decode=main)
   // Main-thread time (ms, summed): handling received frames (and decoding them, on the old path) and the render loop.
@@ -104,7 +107,7 @@ const liquid = new LiquidRenderer(renderer, particles);
 liquid.scale = Number(params.get('liquid-scale')) || (softwareGl ? 0.5 : 1);
 const clock = new FrameClock();
 const boxes = new TargetBoxes(world, (t, tr, rot, s) => send(protocol.setPose(t, tr, rot, s)));
-let meshRoot = null, mixer = null;
+let meshRoot = null, mixer = null, firstAction = null;
 
 const drawingSize = new THREE.Vector2();
 function resize() {
@@ -158,9 +161,18 @@ function onFrame(f, decodeMs) {
   const { frame, count, time, stepMs, errorRate, simFps, controlled, centroid } = f;
   state.previousFrame = state.frame ? state.frame.frame : -1;
   state.frame = { frame, count, time, stepMs, errorRate, simFps, controlled, centroid };
-  state.history.push({ frame, time, error: errorRate, centroid, wall: t0, received: state.framesReceived });
+  // The frame a seek asked for starts a new pair, however near the one before it; so does, while a seek is pending,
+  // a frame that does not follow the one before (an earlier seek's). Frames still on their way from before the seek
+  // continue the old pair.
+  const cut = seek.pending !== null && (frame === seek.pending || frame !== state.previousFrame + 1);
+  if (cut) state.seek.cuts += 1;
+  // (A seek whose frame never comes, e.g. a restart sent after it, stops holding the slider after 2 s of frames.)
+  if (frame === seek.pending || (seek.pending !== null && t0 - seek.lastSent > 2000)) seek.pending = null;
+  state.seek.pending = seek.pending;
+  const continues = clock.push({ frame, time, count }, t0, cut);
+  state.history.push({ frame, time, error: errorRate, centroid, wall: t0, received: state.framesReceived, continues });
   if (state.history.length > 4000) state.history.splice(0, 1000);
-  const continues = clock.push({ frame, time, count }, t0);
+  seek.follow(frame);
   particles.push(f.positions, f.targets, count, continues);
   source.recycle(f);  // the buffers go back to the decoder: the data now lives in the GPU attributes
   state.interp.discontinuities = clock.discontinuities;
@@ -225,6 +237,7 @@ function onHello(h) {
     if (liveSurface) liveSurface.visible = Boolean(h.surface);
   }
   state.hello = h;
+  seek.setup(h);
   hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
   if (h.radius) {
@@ -278,7 +291,9 @@ function loadAnimation(url) {
     world.add(meshRoot);
     mixer = new THREE.AnimationMixer(meshRoot);
     for (const clip of gltf.animations) mixer.clipAction(clip).play();
-    state.animation = { loaded: true, duration: gltf.animations[0]?.duration ?? 0, clips: gltf.animations.length, meshes, time: 0 };
+    firstAction = gltf.animations.length ? mixer.clipAction(gltf.animations[0]) : null;
+    state.animation = { loaded: true, duration: gltf.animations[0]?.duration ?? 0, clips: gltf.animations.length, meshes, time: 0,
+                        clipTime: NaN };
     meshRoot.visible = $('chk-mesh').checked;
     redraw();
   }, undefined, (e) => state.errors.push(`animation: ${e.message ?? e}`));
@@ -308,6 +323,51 @@ $('btn-play').onclick = () => {
   $('btn-play').textContent = paused ? 'play' : 'pause';
 };
 $('btn-restart').onclick = () => send(protocol.restart());
+
+// Seeking (playback only): a slider of the frame index, 0 to the hello's "frames" − 1. Dragging it sends seek (at
+// most every 100 ms, and the value it is let go at); otherwise it follows the frame being played.
+const seek = {
+  el: $('rng-seek'), label: $('seek-label'), dragging: false, pending: null, sentValue: null, lastSent: 0, timer: 0,
+  frames: 0,
+  setup(h) {
+    const on = h.mode === 'playback' && h.frames > 0;
+    $('seek').hidden = !on;
+    this.frames = on ? h.frames : 0;
+    this.el.max = String(Math.max(0, this.frames - 1));
+    if (!on) this.pending = null;
+  },
+  follow(frame) {
+    if (!this.frames || this.dragging || this.pending !== null) return;
+    this.el.value = String(frame);
+    this.label.textContent = `${frame} / ${this.frames - 1}`;
+  },
+  // Asks for frame k (clamped as the server clamps it); the frame that comes back breaks the interpolation.
+  to(k) {
+    if (!this.frames) return;
+    k = Math.min(Math.max(0, Math.round(k)), this.frames - 1);
+    this.pending = k;
+    this.sentValue = k;
+    this.lastSent = performance.now();
+    state.seek.sent += 1;
+    state.seek.last = k;
+    state.seek.pending = k;
+    this.label.textContent = `${k} / ${this.frames - 1}`;
+    send(protocol.seek(k));
+  },
+};
+seek.el.addEventListener('input', () => {
+  seek.dragging = true;
+  seek.label.textContent = `${seek.el.value} / ${seek.frames - 1}`;
+  clearTimeout(seek.timer);
+  const wait = 100 - (performance.now() - seek.lastSent);
+  if (wait <= 0) seek.to(Number(seek.el.value));
+  else seek.timer = setTimeout(() => seek.to(Number(seek.el.value)), wait);
+});
+seek.el.addEventListener('change', () => {  // let go (or a keyboard step): the value it ends at, unless just sent
+  clearTimeout(seek.timer);
+  seek.dragging = false;
+  if (Number(seek.el.value) !== seek.sentValue) seek.to(Number(seek.el.value));
+});
 $('sel-controller').onchange = (e) => send(protocol.setController(state.hello.controllers[Number(e.target.value)]));
 $('sel-mesh').onchange = (e) => send(protocol.setMesh(0, Number(e.target.value)));
 $('sel-look').onchange = (e) => setLook(e.target.value, false);
@@ -501,6 +561,7 @@ function frameLoop(now) {
   if (mixer && state.animation.duration > 0 && Number.isFinite(clock.time)) {
     mixer.setTime(clock.time % state.animation.duration);
     state.animation.time = clock.time;
+    state.animation.clipTime = firstAction ? firstAction.time : NaN;
   }
   if (now - lastHud > 250) {
     lastHud = now;
@@ -554,6 +615,20 @@ state.project = (p) => {
   return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
 };
 state.setLook = (mode) => setLook(mode, false);
+state.seekTo = (k) => seek.to(k);
+// Which of the animation's meshes is shown now (the first whose world matrix is not scaled to nothing; -1: none, or
+// no animation). The run's animation.glb shows one mesh at a time by scaling the others' nodes to zero.
+state.animationShown = () => {
+  if (!meshRoot) return -1;
+  meshRoot.updateMatrixWorld(true);
+  let k = -1, i = 0;
+  meshRoot.traverse((o) => {
+    if (!o.isMesh) return;
+    if (k < 0 && o.visible && Math.abs(o.matrixWorld.determinant()) > 1e-15) k = i;
+    i += 1;
+  });
+  return k;
+};
 state.redraw = redraw;
 state.setBackground = (hex) => { scene.background = new THREE.Color(hex); redraw(); };
 // Hold: frames are counted but not shown, the drawing stays exactly where it is (the test's screenshots of one frame).

@@ -115,6 +115,8 @@ export const setController = (name) => JSON.stringify({ type: 'controller', name
 export const setMesh = (target, mesh) => JSON.stringify({ type: 'mesh', target, mesh });
 /** Live surface on or off (the server reconstructs the fluid about twice a second while on). */
 export const setSurface = (on) => JSON.stringify({ type: 'surface', on: Boolean(on) });
+/** Playback of a finished run: go on from frame `frame` (the server clamps it to the last; live mode answers an error). */
+export const seek = (frame) => JSON.stringify({ type: 'seek', frame: Math.max(0, Math.round(Number(frame) || 0)) });
 /** A target's pose about its pivot: translate (m), rotate (degrees about x, y, z; R = Rz Ry Rx), uniform scale. */
 export const setPose = (target, translate, rotate = [0, 0, 0], scale = 1) =>
   JSON.stringify({ type: 'pose', target, translate, rotate, scale });
