@@ -216,6 +216,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   const int frames = opt.frames.value_or(run_until_formed ? opt.max_auto_frames : scene.output.frames);
   if (!(frames >= 1 && frames <= 10'000'000))
     return param_error(fmt::format("--frames = {} is outside [1, 10000000]", frames));
+  if (opt.frames) scene.output.frames = frames, scene.auto_frames = false;  // the report's scene is the run's
 
   // The fluid is made (and its size checked) before the output folder is touched.
   sim::ParticleSet initial;

@@ -90,6 +90,7 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   s.auto_radius = !given("solver", "particle_radius");
   s.auto_domain = !given("domain", nullptr);
   s.auto_frames = !given("output", "frames");
+  s.auto_fluid = s.fluid.empty() && !s.targets.empty();
   FF_CHECK(s.validate());
   // The resume hash covers everything that shapes the simulation; the frame count may change between runs.
   json h = j;
@@ -107,6 +108,7 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
 json scene_to_json(const Scene& scene) {
   json j = fields_to_json(scene);
   if (scene.auto_frames) j["output"].erase("frames");
+  if (scene.auto_fluid) j.erase("fluid");
   return j;
 }
 
@@ -118,8 +120,12 @@ std::vector<core::KeyRow> scene_keys() {
 
 std::string scene_keys_markdown() {
   std::string s = "| key | type | default | range | what |\n| --- | --- | --- | --- | --- |\n";
+  const auto cell = [](std::string c) {  // a '|' inside a cell would end it
+    for (std::size_t k = c.find('|'); k != std::string::npos; k = c.find('|', k + 2)) c.replace(k, 1, "\\|");
+    return c;
+  };
   for (const auto& r : scene_keys())
-    s += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.key, r.type, r.default_value, r.range, r.doc);
+    s += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.key, cell(r.type), cell(r.default_value), cell(r.range), cell(r.doc));
   return s;
 }
 

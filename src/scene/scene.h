@@ -105,6 +105,7 @@ struct Scene {
   bool auto_radius = true;            ///< solver.particle_radius was not given: size it from the targets
   bool auto_domain = true;            ///< domain was not given
   bool auto_frames = true;            ///< output.frames was not given: with targets, run until formed (within a cap)
+  bool auto_fluid = false;            ///< targets and no fluid list: the fluid is made from the targets
   std::uint64_t hash = 0;            ///< content hash of the simulation-relevant settings (for --resume)
 
   /// The scene file's top-level keys, each a struct with its own field list.
@@ -130,8 +131,9 @@ Result<Scene> parse_scene(std::string_view json_text, const std::filesystem::pat
 Result<Scene> load_scene(const std::filesystem::path& file);
 
 /// The scene as a scene file: every key of every struct (mesh paths absolute), so that parsing it again gives the
-/// same scene from any folder. What the scene left automatic and the pipeline filled in (particle radius, domain,
-/// fluid) is written as filled in; an automatic run length stays automatic (output.frames left out).
+/// same scene from any folder. What the scene left automatic and the pipeline filled in (particle radius, domain) is
+/// written as filled in; an automatic fluid and run length stay automatic (fluid and output.frames left out): the
+/// fluid made from the targets is shared out by the volume their samples stand for, a given one by mesh volume.
 nlohmann::json scene_to_json(const Scene& scene);
 
 /// Every scene key with its type, default, range and one line ("fluidform keys", the README's table).

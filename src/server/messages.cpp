@@ -66,6 +66,9 @@ Result<Command> parse_command(std::string_view text) {
     const auto on = j.find("on");
     if (on == j.end() || !on->is_boolean()) return input_error("surface: \"on\" must be true or false");
     c.on = on->get<bool>();
+  } else if (t == "seek") {
+    c.kind = Command::Kind::Seek;
+    FF_TRY(c.frame, index(j, "frame"));
   } else {
     return input_error("unknown type");
   }

@@ -6,6 +6,7 @@
 //   {"type": "pose", "target": 0, "translate": [x, y, z], "rotate": [rx, ry, rz], "scale": 1}   (rotate, scale optional)
 //   {"type": "mesh", "target": 0, "mesh": 1}      (an index into the hello message's "meshes")
 //   {"type": "surface", "on": true}               (live surface: the reconstructed mesh, sent about twice a second)
+//   {"type": "seek", "frame": 12}                  (playback of a finished run: go on from that frame)
 #include "pipeline/live_scene.h"
 #include "core/error.h"
 
@@ -17,11 +18,12 @@ namespace ff::server {
 inline constexpr std::size_t kMaxClientMessage = 16 * 1024;  ///< bytes; a real command is under 200
 
 struct Command {
-  enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh, Surface } kind = Kind::Play;
+  enum class Kind { Play, Pause, Restart, Controller, Pose, Mesh, Surface, Seek } kind = Kind::Play;
   std::size_t target = 0;
   pipeline::LivePose pose;
   std::string name;      ///< Controller
   std::size_t mesh = 0;  ///< Mesh
+  std::size_t frame = 0; ///< Seek
   bool on = false;       ///< Surface
 };
 

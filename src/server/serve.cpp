@@ -210,8 +210,13 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
   std::uint64_t frames = 0;
   double step_total = 0.0, last_surface = -kSurfaceEvery;
   int surface_frame = -1;
+  // The solver keeps its particles in cell order, which changes between frames; the viewer interpolates each
+  // particle between two frames, so frames go out in particle-id order (as a run's PLY frames are written).
+  std::vector<Vec3f> by_id_x, by_id_v;
+  std::vector<std::uint8_t> by_id_t;
   const auto publish_particles = [&](const FrameInfo& info) {
-    publish(sh, info, scene.particles().position, scene.particles().target);
+    sim::sorted_by_id(scene.particles(), by_id_x, by_id_v, by_id_t);
+    publish(sh, info, by_id_x, by_id_t);
   };
   publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
   while (!sh.stop) {
@@ -233,6 +238,7 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
           break;
         }
         case Command::Kind::Mesh: st = scene.set_mesh(c.target, c.mesh, progress); break;
+        case Command::Kind::Seek: st = input_error("seek: a live simulation cannot seek (restart instead)"); break;
         case Command::Kind::Surface:
           sh.surface = c.on;
           last_surface = -kSurfaceEvery, surface_frame = -1;  // one now, whatever the last one was
@@ -319,15 +325,18 @@ void playback_loop(const Recording& rec, Shared& sh, const ServeOptions& opt) {
   Pacer pace(opt.max_fps > 0 ? std::min(opt.max_fps, rec.fps) : rec.fps);
   RateMeter rate;
   std::size_t k = 0;
+  bool show_once = false;
   while (!sh.stop) {
     for (Command& c : sh.commands.take()) {
       if (c.kind == Command::Kind::Play) sh.paused = false;
       else if (c.kind == Command::Kind::Pause) sh.paused = true;
       else if (c.kind == Command::Kind::Restart) k = 0;
+      else if (c.kind == Command::Kind::Seek) k = std::min(c.frame, rec.frames.size() - 1), show_once = true;
       else error_text(sh, "playback: a recorded run cannot be steered");
       sh.set_hello(playback_hello(rec, sh.paused));
     }
-    if (sh.paused) {
+    // Paused: nothing moves, except that a seek shows the frame it asked for (once, without going on).
+    if (sh.paused && !show_once) {
       sh.commands.wait(0.05, sh.stop);
       pace.hold();
       continue;
@@ -341,6 +350,12 @@ void playback_loop(const Recording& rec, Shared& sh, const ServeOptions& opt) {
     const FrameInfo info{static_cast<std::uint32_t>(k), double(k) / rec.fps, static_cast<float>(1e3 * rec.step_seconds[k]),
                          static_cast<float>(rec.error_rate[k]), rate.tick(), 0};
     publish(sh, info, frame->positions, frame->targets);
+    if (sh.paused) {
+      show_once = false;
+      pace.hold();
+      continue;
+    }
+    show_once = false;
     k = (k + 1) % rec.frames.size();
     if (const double wait = pace.wait(); wait > 0) sh.commands.wait(wait, sh.stop);
   }

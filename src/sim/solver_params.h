@@ -62,7 +62,7 @@ struct SolverParams {
     f("epsilon", s.epsilon, open_closed(0.0, 100.0, "λ relaxation ε, × S_0"));
     f("scorr_k", s.scorr_k, closed(0.0, 1.0, "tensile-instability strength k"));
     f("scorr_n", s.scorr_n, closed(1, 8, "s_corr exponent n"));
-    f("scorr_dq", s.scorr_dq, open(0.0, 1.0, "|Δq|, × H_p"));
+    f("scorr_dq", s.scorr_dq, open(0.0, 1.0, "Δq as a length, × H_p"));
     f("surface_tension", s.surface_tension, closed(0.0, 10.0, "σ (seed eq. 13) at the reference spacing 0.05 m; 0 = off"));
     f("surface_tension_samples", s.surface_tension_samples, closed(1.0, 1e6, "C_sd, Monte-Carlo points per second"));
     f("drag", s.drag, closed(0.0, 10.0, "s, air drag scale (seed eq. 14); 0 = off"));

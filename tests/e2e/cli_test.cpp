@@ -88,7 +88,9 @@ TEST(Cli, KillNineThenResumeGivesTheSameFinalFrame) {
   while (!fs::exists(ckpt) && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ASSERT_TRUE(fs::exists(ckpt)) << "no checkpoint appeared";
-  std::this_thread::sleep_for(std::chrono::milliseconds(150));  // die between checkpoints
+  // Die between checkpoints: frames 6–9 are written after the checkpoint of frame 5 and before that of frame 10.
+  while (!fs::exists(out / "particles" / "frame_00007.ply") && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
   ASSERT_EQ(::kill(p.pid, SIGKILL), 0);
   const auto killed = wait(p);
   ASSERT_EQ(killed.code, 128 + SIGKILL) << "the run finished before it could be killed; make the scene longer";
@@ -254,6 +256,37 @@ TEST(Cli, SampleBadInputIsOneLineAndWritesNothing) {
     EXPECT_FALSE(fs::exists(out)) << c.name;
   }
   expect_no_temp_files(dir);
+}
+
+// report.json's scene is the whole scene the run used: run again, it gives the same frames. Two targets, everything
+// else automatic (radius, fluid, domain), the length from --frames: the cases where the written scene must say what
+// the run filled in or was told.
+TEST(Cli, TheReportsSceneRunAgainGivesTheSameFrames) {
+  const auto dir = test::temp_dir("reproduce");
+  test::write_obj(dir / "ball.obj", test::sphere_mesh(0.2f, 3));
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.15f, 0.0f, -0.1f), Vec3f(0.15f, 0.3f, 0.1f)));
+  const auto scene = write_scene(dir, R"({"targets": [{"mesh": "ball.obj", "translate": [-0.3, 0.4, 0]},
+                                                      {"mesh": "box.obj", "translate": [0.35, 0.2, 0], "start": 0.1}],
+                                         "sampling": {"auto_count": 600}, "controller": {"adaptive": {"alpha": 0.6}}})");
+  const auto first = run({"-q", "run", scene.string(), "-o", (dir / "first").string(), "--frames", "30", "--no-mesh"});
+  ASSERT_EQ(first.code, 0) << first.err;
+  const auto rep = nlohmann::json::parse(read_file(dir / "first" / "report.json"));
+  ASSERT_TRUE(rep["scene"]["controller"]["adaptive"]["alpha"].is_number()) << rep["scene"].dump();
+  EXPECT_EQ(rep["scene"]["output"]["frames"], 30);
+  const fs::path again = dir / "elsewhere" / "again.json";  // another folder: the mesh paths must be absolute
+  fs::create_directories(again.parent_path());
+  std::ofstream(again) << rep["scene"].dump(2);
+  const auto second = run({"-q", "run", again.string(), "-o", (dir / "second").string(), "--no-mesh"});
+  ASSERT_EQ(second.code, 0) << second.err;
+  for (int f : {1, 15, 30}) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.ply", f);
+    const auto a = read_file(dir / "first" / "particles" / name), b = read_file(dir / "second" / "particles" / name);
+    ASSERT_FALSE(a.empty()) << name;
+    EXPECT_TRUE(a == b) << name << " differs when the report's scene is run again";
+  }
+  const auto rep2 = nlohmann::json::parse(read_file(dir / "second" / "report.json"));
+  EXPECT_EQ(rep2["scene"], rep["scene"]);
 }
 
 TEST(Cli, RunSamplesTargetsOnceThenUsesTheCache) {

@@ -28,6 +28,12 @@ TEST(Messages, Commands) {
   EXPECT_EQ(c->kind, Command::Kind::Surface);
   EXPECT_TRUE(c->on);
   EXPECT_FALSE(parse_command(R"({"type":"surface","on":false})")->on);
+  c = parse_command(R"({"type":"seek","frame":12})");
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->kind, Command::Kind::Seek);
+  EXPECT_EQ(c->frame, 12u);
+  EXPECT_FALSE(parse_command(R"({"type":"seek","frame":-1})"));
+  EXPECT_FALSE(parse_command(R"({"type":"seek"})"));
 }
 
 TEST(Messages, GarbageIsRefused) {
