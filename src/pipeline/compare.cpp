@@ -1,5 +1,7 @@
 #include "pipeline/compare.h"
 
+#include "metrics/report.h"
+
 #include "control/registry.h"
 #include "core/parallel.h"
 #include "io/atomic_file.h"
@@ -78,7 +80,7 @@ struct ErrorSeries {
 ErrorSeries read_error_series(const fs::path& csv) {
   ErrorSeries s;
   const io::CsvTable t = io::read_csv(csv);
-  const std::size_t c_time = t.column("time_s"), c_err = t.column("error_rate_pct");
+  const std::size_t c_time = t.column(metrics::column::time), c_err = t.column(metrics::column::error_rate);
   if (c_time >= t.head.size() || c_err >= t.head.size()) return s;
   for (const auto& f : t.rows) {
     if (f.size() <= std::max(c_time, c_err)) continue;

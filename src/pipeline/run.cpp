@@ -16,6 +16,7 @@
 #include "sim/emitter.h"
 #include "sim/pbf_solver.h"
 #include "control/registry.h"
+#include "metrics/report.h"
 #include "metrics/shape_metrics.h"
 #include "metrics/summary.h"
 
@@ -28,119 +29,11 @@
 
 namespace ff::pipeline {
 namespace fs = std::filesystem;
+using metrics::FrameRow;
+using metrics::TargetRow;
 using nlohmann::json;
 
 namespace {
-
-/// One row of metrics.csv (DESIGN.md output contract).
-struct FrameRow {
-  int frame = 0;
-  double time = 0.0;              // s, simulated time at the end of the frame
-  std::size_t particles = 0;
-  double step_seconds = 0.0;      // wall-clock of the frame's sub-steps (no I/O)
-  int substeps = 0;
-  long iterations = 0;            // density-constraint sweeps over all sub-steps
-  double density_error_mean = 0;  // mean of max(ρ/ρ0 − 1, 0)
-  double density_error_max = 0;
-  double peak_memory_mib = 0;
-  // Shape metrics (METHOD §d), N_c-weighted over the targets; NaN without targets.
-  std::size_t controlled = 0;
-  double error_rate = NAN, e_fwd = NAN, e_bwd = NAN, e_fwd_all = NAN, inside = NAN, splash = NAN;
-  double control_seconds = 0;     // wall-clock of the controller's hooks within step_seconds
-};
-
-/// One target's metrics in one frame (metrics_targets.csv).
-struct TargetRow {
-  int frame = 0;
-  int target = 0;
-  metrics::FrameMetrics m;
-};
-
-// NaN is not JSON: metrics that are undefined are stored as null.
-json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-double num_of(const json& j) { return j.is_number() ? j.get<double>() : NAN; }
-
-json rows_to_json(const std::vector<FrameRow>& rows) {
-  json a = json::array();
-  for (const auto& r : rows)
-    a.push_back({r.frame, r.time, r.particles, r.step_seconds, r.substeps, r.iterations, r.density_error_mean,
-                 r.density_error_max, r.peak_memory_mib, r.controlled, num(r.error_rate), num(r.e_fwd), num(r.e_bwd),
-                 num(r.e_fwd_all), num(r.inside), num(r.splash), r.control_seconds});
-  return a;
-}
-
-json target_rows_to_json(const std::vector<TargetRow>& rows) {
-  json a = json::array();
-  for (const auto& r : rows)
-    a.push_back({r.frame, r.target, r.m.fluid, r.m.controlled, num(r.m.error_rate), num(r.m.e_fwd), num(r.m.e_bwd),
-                 num(r.m.e_fwd_all), num(r.m.inside_fraction), num(r.m.splash_fraction), num(r.m.error_spacings)});
-  return a;
-}
-
-std::vector<TargetRow> target_rows_from_json(const json& a) {
-  std::vector<TargetRow> rows;
-  if (!a.is_array()) return rows;
-  for (const auto& e : a) {
-    TargetRow r;
-    r.frame = e[0].get<int>();
-    r.target = e[1].get<int>();
-    r.m.fluid = e[2].get<std::size_t>();
-    r.m.controlled = e[3].get<std::size_t>();
-    r.m.error_rate = num_of(e[4]);
-    r.m.e_fwd = num_of(e[5]);
-    r.m.e_bwd = num_of(e[6]);
-    r.m.e_fwd_all = num_of(e[7]);
-    r.m.inside_fraction = num_of(e[8]);
-    r.m.splash_fraction = num_of(e[9]);
-    r.m.error_spacings = num_of(e[10]);
-    rows.push_back(r);
-  }
-  return rows;
-}
-
-std::vector<FrameRow> rows_from_json(const json& a) {
-  std::vector<FrameRow> rows;
-  if (!a.is_array()) return rows;
-  for (const auto& e : a) {
-    FrameRow r{e[0].get<int>(), e[1].get<double>(), e[2].get<std::size_t>(), e[3].get<double>(), e[4].get<int>(),
-               e[5].get<long>(), e[6].get<double>(), e[7].get<double>(), e[8].get<double>()};
-    if (e.size() >= 16) {
-      r.controlled = e[9].get<std::size_t>();
-      r.error_rate = num_of(e[10]);
-      r.e_fwd = num_of(e[11]);
-      r.e_bwd = num_of(e[12]);
-      r.e_fwd_all = num_of(e[13]);
-      r.inside = num_of(e[14]);
-      r.splash = num_of(e[15]);
-      if (e.size() >= 17) r.control_seconds = num_of(e[16]);
-    }
-    rows.push_back(r);
-  }
-  return rows;
-}
-
-std::string metrics_csv(const std::vector<FrameRow>& rows) {
-  std::string s =
-      "frame,time_s,particles,step_time_s,substeps,iterations,density_error_mean,density_error_max,peak_memory_mb,"
-      "controlled,error_rate_pct,e_fwd_m,e_bwd_m,e_fwd_all_m,inside_fraction,splash_fraction,control_time_s\n";
-  for (const auto& r : rows)
-    s += fmt::format("{},{:.6f},{},{:.6f},{},{},{:.6g},{:.6g},{:.1f},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6f}\n", r.frame,
-                     r.time, r.particles, r.step_seconds, r.substeps, r.iterations, r.density_error_mean,
-                     r.density_error_max, r.peak_memory_mib, r.controlled, r.error_rate, r.e_fwd, r.e_bwd, r.e_fwd_all,
-                     r.inside, r.splash, r.control_seconds);
-  return s;
-}
-
-std::string target_metrics_csv(const std::vector<TargetRow>& rows) {
-  std::string s =
-      "frame,target,fluid,controlled,error_rate_pct,e_fwd_m,e_bwd_m,e_fwd_all_m,inside_fraction,splash_fraction,"
-      "error_spacings\n";
-  for (const auto& r : rows)
-    s += fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.frame, r.target, r.m.fluid,
-                     r.m.controlled, r.m.error_rate, r.m.e_fwd, r.m.e_bwd, r.m.e_fwd_all, r.m.inside_fraction,
-                     r.m.splash_fraction, r.m.error_spacings);
-  return s;
-}
 
 /// Mean wall-clock of the simulated frames (frame 0 is the initial state, not simulated).
 double mean_step_seconds(const std::vector<FrameRow>& rows) {
@@ -259,8 +152,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     next_frame = static_cast<int>(ck->next_frame);
     time = ck->time;
     const json extra = json::parse(ck->extra, nullptr, false);
-    if (!extra.is_discarded() && extra.contains("rows")) rows = rows_from_json(extra["rows"]);
-    if (!extra.is_discarded() && extra.contains("target_rows")) target_rows = target_rows_from_json(extra["target_rows"]);
+    if (!extra.is_discarded() && extra.contains("rows")) rows = metrics::rows_from_json(extra["rows"]);
+    if (!extra.is_discarded() && extra.contains("target_rows")) target_rows = metrics::target_rows_from_json(extra["target_rows"]);
     resumed = true;
     spdlog::info("resuming from frame {} (t = {:.4f} s, {} particles)", next_frame, time, particles.size());
   } else if (opt.resume) {
@@ -317,15 +210,15 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
         return metrics::window_mean(v, tail);
       };
       const auto& last = rows.back();
-      t["error_rate_pct"] = num(sum.steady);
-      t["error_rate_final_pct"] = num(sum.final_value);
-      t["time_to_form_s"] = num(sum.time_to_form);
-      t["time_to_form_stable_s"] = num(sum.time_to_form_stable);
-      t["e_fwd_m"] = num(tail_mean([](const FrameRow& r) { return r.e_fwd; }));
-      t["e_bwd_m"] = num(tail_mean([](const FrameRow& r) { return r.e_bwd; }));
-      t["e_fwd_all_m"] = num(tail_mean([](const FrameRow& r) { return r.e_fwd_all; }));
-      t["inside_fraction"] = num(tail_mean([](const FrameRow& r) { return r.inside; }));
-      t["splash_fraction"] = num(tail_mean([](const FrameRow& r) { return r.splash; }));
+      t["error_rate_pct"] = metrics::json_number(sum.steady);
+      t["error_rate_final_pct"] = metrics::json_number(sum.final_value);
+      t["time_to_form_s"] = metrics::json_number(sum.time_to_form);
+      t["time_to_form_stable_s"] = metrics::json_number(sum.time_to_form_stable);
+      t["e_fwd_m"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.e_fwd; }));
+      t["e_bwd_m"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.e_bwd; }));
+      t["e_fwd_all_m"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.e_fwd_all; }));
+      t["inside_fraction"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.inside; }));
+      t["splash_fraction"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.splash; }));
       t["controlled_final"] = last.controlled;
       t["controlled_per_control"] = control_count ? double(last.controlled) / double(control_count) : 0.0;
       json per = json::array();
@@ -337,19 +230,19 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
           if (r.target == static_cast<int>(k)) ek.push_back(r.m.error_rate), tk.push_back(r.frame * frame_dt), lastk = &r;
         const auto sk = metrics::summarize(ek, tk);
         per.push_back({{"target", k},
-                       {"error_rate_pct", num(sk.steady)},
-                       {"time_to_form_s", num(sk.time_to_form)},
+                       {"error_rate_pct", metrics::json_number(sk.steady)},
+                       {"time_to_form_s", metrics::json_number(sk.time_to_form)},
                        {"fluid", lastk ? lastk->m.fluid : 0},
                        {"controlled", lastk ? lastk->m.controlled : 0},
-                       {"inside_fraction", lastk ? num(lastk->m.inside_fraction) : json(nullptr)},
-                       {"splash_fraction", lastk ? num(lastk->m.splash_fraction) : json(nullptr)},
-                       {"error_spacings", num(sk.steady * shapes[k].shape.back().diagonal() / (100.0 * scene.solver.spacing()))}});
+                       {"inside_fraction", lastk ? metrics::json_number(lastk->m.inside_fraction) : json(nullptr)},
+                       {"splash_fraction", lastk ? metrics::json_number(lastk->m.splash_fraction) : json(nullptr)},
+                       {"error_spacings", metrics::json_number(sk.steady * shapes[k].shape.back().diagonal() / (100.0 * scene.solver.spacing()))}});
         es_w += double(shapes[k].shape.back().sample_count()) * sk.steady * shapes[k].shape.back().diagonal() /
                 (100.0 * scene.solver.spacing());
         es_n += double(shapes[k].shape.back().sample_count());
       }
       t["per_target"] = per;
-      t["error_spacings"] = num(es_w / es_n);
+      t["error_spacings"] = metrics::json_number(es_w / es_n);
     }
     return t;
   };
@@ -362,8 +255,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     rep["scene"] = scene::scene_to_json(scene);  // every key the run used: run it again to reproduce the run
     rep["targets"] = targets_json;
     rep["totals"] = totals();
-    FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics_csv(rows)));
-    if (!shapes.empty()) FF_CHECK(io::write_file_atomic(out / "metrics_targets.csv", target_metrics_csv(target_rows)));
+    FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics::metrics_csv(rows)));
+    if (!shapes.empty()) FF_CHECK(io::write_file_atomic(out / "metrics_targets.csv", metrics::target_metrics_csv(target_rows)));
     return io::write_file_atomic(out / "report.json", rep.dump(2) + "\n");
   };
 
@@ -400,7 +293,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     const bool done = run_until_formed && formed_and_held(rows, window, 2 * window);
     if (scene.output.checkpoint_every > 0 && (f % scene.output.checkpoint_every == 0 || f == frames || done)) {
       sim::Checkpoint ck{f + 1, time, scene.hash,
-                         json{{"rows", rows_to_json(rows)}, {"target_rows", target_rows_to_json(target_rows)}}.dump(),
+                         json{{"rows", metrics::rows_to_json(rows)}, {"target_rows", metrics::target_rows_to_json(target_rows)}}.dump(),
                          particles};
       FF_CHECK(io::write_file_atomic(ckpt_file, sim::encode_checkpoint(ck)));
       FF_CHECK(write_report("running", ""));

@@ -8,6 +8,7 @@
 #include "io/particle_frames.h"
 #include "scene/scene.h"
 #include "io/write_ply.h"
+#include "metrics/report.h"
 #include "server/frame_codec.h"
 #include "server/messages.h"
 #include "server/static_files.h"
@@ -303,7 +304,8 @@ Result<Recording> open_recording(const fs::path& out) {
   r.error_rate.assign(r.frames.size(), NAN);
   r.step_seconds.assign(r.frames.size(), 0.0);
   const io::CsvTable csv = io::read_csv(out / "metrics.csv");
-  const std::size_t c_frame = csv.column("frame"), c_err = csv.column("error_rate_pct"), c_step = csv.column("step_time_s");
+  const std::size_t c_frame = csv.column(metrics::column::frame), c_err = csv.column(metrics::column::error_rate),
+                    c_step = csv.column(metrics::column::step_time);
   for (const auto& v : csv.rows) {
     if (c_frame >= v.size()) continue;
     const long f = std::strtol(v[c_frame].c_str(), nullptr, 10);
