@@ -61,98 +61,25 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
                                                                         const ControlContext& ctx,
                                                                         const AdaptiveParams& params) {
   FF_CHECK(params.validate());
-  FF_TRY(CheckedTargets checked, check_targets(std::move(targets), "adaptive"));
-  std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, checked.hc));
-  c->start_ = std::move(checked.start);
-  c->motion_ = std::move(checked.motion);
-  c->moving_ = checked.moving;
-  c->phases_ = std::move(checked.phases);
-  c->current_.assign(c->phases_.size(), 0);
+  ControlSamples samples;
+  FF_CHECK(samples.init(std::move(targets), "adaptive",
+                        {.cell_order = true, .weights = params.weights, .normals = true, .velocities = false}));
+  std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, samples.hc));
+  c->samples_ = std::move(samples);
   const float d = ctx.spacing();
   // ε_c = epsilon · S_0 with ρ_ref the lattice's kernel-sum density at H_c: what a filled interior sample sees
   // (METHOD §a.3).
   const double rho_ref = sampling::lattice_density(d, c->hc_, ctx.rest_density);
   const double s0 = full_gradient_sum(d, c->hc_, ctx.particle_mass, rho_ref);
   c->eps_c_ = static_cast<float>(params.epsilon * s0);
-  c->flatten();
+  c->fill_.assign(c->samples_.size(), 0.0f);
   // The gather field covers the domain at the control support (coarser on a huge domain).
-  c->seed_field_.resize(c->phases_.size());
+  c->seed_field_.resize(c->samples_.targets());
   for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, c->hc_);
   return c;
 }
 
-// The samples of every target's current phase, flattened into the SoA arrays the loops use, with the
-// per-sample boundary normals and g_ref (eq. 15–16). Run at the start and whenever a target swaps its mesh.
-void AdaptiveController::flatten() {
-  xc_.clear(), rho_c_.clear(), phi_.clear(), tc_.clear(), mass_c_.clear(), orig_.clear();
-  std::vector<std::pair<std::int64_t, Index>> order;
-  for (std::size_t t = 0; t < phases_.size(); ++t) {
-    const auto& s = phases_[t][current_[t]].set;
-    mass_c_.push_back(s.mass);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      // Key: the sample's cell in the global lattice of edge H_c, z-major like NeighborGrid's keys. Sorted by
-      // it, consecutive samples share their fluid-grid cell (the grids snap to the same lattice), so the
-      // control–fluid query gathers each cell's candidates once, and pair loops walk fluid memory in order.
-      const Vec3f c = (s.position[i] / hc_).array().floor();
-      const auto k = [&](int a) { return static_cast<std::int64_t>(std::clamp(c[a], -1e6f, 1e6f)) + 1'000'000; };
-      order.emplace_back((k(2) * 2'000'001 + k(1)) * 2'000'001 + k(0), static_cast<Index>(xc_.size()));
-      xc_.push_back(s.position[i]);
-      rho_c_.push_back(s.density[i]);
-      phi_.push_back(params_.weights ? s.phi[i] : 1.0f);
-      tc_.push_back(static_cast<std::uint8_t>(t));
-    }
-  }
-  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  auto permute = [&](auto& v) {
-    auto old = v;
-    for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k].second];
-  };
-  permute(xc_), permute(rho_c_), permute(phi_), permute(tc_);
-  orig_.resize(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) orig_[k] = order[k].second;
-  // g_ref: the largest control-density gradient, which is found at the target surface (eq. 15 threshold).
-  core::NeighborGrid grid(hc_);
-  grid.build(xc_);
-  core::NeighborList self;
-  grid.query(xc_, xc_, hc_, self);
-  const auto m = static_cast<std::int64_t>(xc_.size());
-  grad_c_.resize(xc_.size());
-  g_ref_ = static_cast<float>(core::deterministic_max(m, 0.0, [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    Vec3f g = Vec3f::Zero();
-    for (Index j : self.of(i))
-      if (tc_[j] == tc_[i]) g += mass_c_[tc_[i]] * spiky_.grad(xc_[i] - xc_[j]);
-    grad_c_[i] = -g;  // n at the sample: minus the control-density gradient, pointing out of the target
-    return static_cast<double>(g.norm());
-  }));
-  if (moving_) {
-    rest_x_ = xc_;
-    rest_grad_ = grad_c_;
-    move_targets(time_);
-  }
-  fill_.assign(xc_.size(), 0.0f);
-}
-
-// Samples of keyframed targets follow their pose; densities keep their rest values (rigid motion keeps
-// them exactly; a scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow).
-void AdaptiveController::move_targets(double time) {
-  std::vector<Pose> pose(motion_.size());
-  for (std::size_t t = 0; t < motion_.size(); ++t) pose[t] = motion_[t].at(time);
-  parallel_for(static_cast<std::int64_t>(xc_.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    const auto t = tc_[i];
-    if (!motion_[t].moving()) return;
-    xc_[i] = pose[t].apply(rest_x_[i]);
-    grad_c_[i] = pose[t].rotation * rest_grad_[i];
-  });
-}
-
-void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) {
-  if (target >= motion_.size()) return;
-  // Nothing moved so far: the samples are at rest, so they are the rest pose that move_targets maps from.
-  if (!moving_) rest_x_ = xc_, rest_grad_ = grad_c_, moving_ = true;
-  motion_[target].live = pose;
-}
+void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) { samples_.set_target_pose(target, pose); }
 
 // The bond masks hold a byte per group of four pairs, one bit per pair.
 template <class F>
@@ -167,18 +94,14 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   time_ = view.time;
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
-  bool swapped = false;
-  for (std::size_t t = 0; t < phases_.size(); ++t)
-    while (current_[t] + 1 < phases_[t].size() && view.time >= phases_[t][current_[t] + 1].time) ++current_[t], swapped = true;
-  if (swapped) flatten();
-  else if (moving_) move_targets(view.time);
-  const std::size_t n = p.size(), m = xc_.size();
+  if (samples_.update(view.time, 0.0f)) fill_.assign(samples_.size(), 0.0f);
+  const std::size_t n = p.size(), m = samples_.position.size();
   const Vec3f* x = p.position.data();
   const std::uint8_t* tf = p.target.data();
   // Control–fluid pairs within H_c, one query per sub-step on the positions at its start (samples → fluid); the
   // fluid → sample bonds are its transpose, built below.
   fluid_grid_.build(p.position);
-  fluid_grid_.query(p.position, xc_, hc_, cf_);
+  fluid_grid_.query(p.position, samples_.position, hc_, cf_);
   nearest_.resize(n);
   fill_.resize(m);
   hstar2_.resize(m);
@@ -189,7 +112,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
   using namespace core::simd;
   const float mp = ctx_.particle_mass, hc2 = hc_ * hc_;
-  const bool multi = mass_c_.size() > 1;
+  const bool multi = samples_.mass.size() > 1;
   const __m128 h2 = broadcast(poly6_.h2), hc2v = broadcast(hc2), zero = _mm_setzero_ps();
   // Groups of four pairs per sample: where each sample's bond masks start.
   grp_base_.resize(m + 1);
@@ -198,12 +121,12 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   bond_mask_.resize(grp_base_[m]);
   const auto fill_sample = [&](std::size_t i) {
     float rho = 0.0f;
-    const std::uint8_t t = tc_[i];
+    const std::uint8_t t = samples_.target[i];
     std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
     if (!active(t, time_)) {
       std::fill(mask, mask + (grp_base_[i + 1] - grp_base_[i]), std::uint8_t(0));
     } else {
-      const Vec3f xi = xc_[i];
+      const Vec3f xi = samples_.position[i];
       const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
       __m128 sw = zero;
       std::size_t g = 0;
@@ -220,9 +143,9 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       });
       rho = poly6_.k * hsum(sw);
     }
-    const float f = mp * rho / rho_c_[i];
+    const float f = mp * rho / samples_.rho_c[i];
     fill_[i] = f;
-    xcw_[i] = {xc_[i].x(), xc_[i].y(), xc_[i].z(), f};
+    xcw_[i] = {samples_.position[i].x(), samples_.position[i].y(), samples_.position[i].z(), f};
     float scale = 1.0f;
     if (params_.bond_breaking) {
       scale = params_.bond_radius == BondRadius::Paper ? 1.0f / (1.0f + f) : std::min(1.0f, 2.0f / (1.0f + f));
@@ -231,7 +154,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     hstar2_[i] = hs2;
     // Bond masks, one bit per pair: r ≤ H_c*,i (and the same target). The pairs are still in L1 from the sum.
     if (!active(t, time_) || hs2 == hc2) return;
-    const Vec3f xi = xc_[i];
+    const Vec3f xi = samples_.position[i];
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z()), hs = broadcast(hs2);
     std::size_t g = 0;
     core::for_neighbors4(cf_.of(i), 0, [&](const Index* j, __m128 lanes) {
@@ -263,7 +186,7 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
 // samples. Within a particle, bonds are in ascending sample order for any thread count (thread ranges are
 // ordered), so the result is thread-count invariant. A fluid particle is controlled iff it has a bond (METHOD §a.5).
 void AdaptiveController::build_bonds(sim::ParticleSet& p) {
-  const std::size_t n = p.size(), m = xc_.size();
+  const std::size_t n = p.size(), m = samples_.position.size();
   const Vec3f* x = p.position.data();
   const int T = bond_threads(m);  // the fill pass's partition: cursor_ holds its counts per thread
   bond_off_.resize(n + 1);
@@ -332,7 +255,7 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
     for (std::size_t k = 1; k < 4; ++k)
       if (r2s[k] < r2s[l] || (r2s[k] == r2s[l] && is[k] < is[l])) l = k;
     nearest_[j] = is[l];
-    bound[j] = orig_[is[l]];
+    bound[j] = samples_.original[is[l]];
   });
 }
 
@@ -346,12 +269,12 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
   // summed over the ~270 samples around the particle: the two differ by less than a spacing in position, and
   // the sum cost as much as the whole control correction.
   if (params_.boundary_correction) {
-    const float thr = params_.normal_threshold * g_ref_;
+    const float thr = params_.normal_threshold * samples_.g_ref;
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
       const auto j = static_cast<std::size_t>(jj);
       const Index i = nearest_[j];
       if (i == kInvalidIndex) return;
-      const Vec3f nrm = grad_c_[i];
+      const Vec3f nrm = samples_.normal[i];
       const float len = nrm.norm();
       if (!(len >= thr) || len == 0.0f) return;
       const Vec3f nh = nrm / len;
@@ -378,7 +301,7 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
 // toward the nearest of them, at a limited speed, with gravity cancelled so it can rise into a target
 // above it. It stops as soon as the particle is bonded (the control takes over) or the target is full.
 void AdaptiveController::gather(sim::ParticleSet& p) {
-  const std::size_t n = p.size(), m = xc_.size();
+  const std::size_t n = p.size(), m = samples_.position.size();
   // Which targets have unbonded fluid at all (once formed, none: the field is not worth computing).
   std::vector<char> wanted(seed_field_.size(), 0);
   for (std::size_t j = 0; j < n; ++j)
@@ -387,8 +310,8 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     seeds_.clear();
     if (wanted[t] && active(static_cast<std::uint8_t>(t), time_))
       for (std::size_t i = 0; i < m; ++i)
-        if (tc_[i] == t && fill_[i] < params_.gather_fill) seeds_.push_back(static_cast<Index>(i));
-    seed_field_[t].compute(xc_, seeds_);
+        if (samples_.target[i] == t && fill_[i] < params_.gather_fill) seeds_.push_back(static_cast<Index>(i));
+    seed_field_[t].compute(samples_.position, seeds_);
   }
   const float speed = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
   const Vec3f g = ctx_.gravity;
@@ -402,7 +325,7 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     if (t >= seed_field_.size() || bond_off_[j] != bond_off_[j + 1]) return;
     const Index s = seed_field_[t].nearest(x[j]);
     if (s == kInvalidIndex) return;
-    const Vec3f to = xc_[s] - x[j];
+    const Vec3f to = samples_.position[s] - x[j];
     const float len = to.norm();
     if (len <= 0.0f) return;
     const Vec3f v_des = (speed / len) * to;
@@ -456,12 +379,12 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
 // g_ij = −(m_p/ρ_c,i) ∇W(x_ci − x*_j); per fluid particle Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij, at most clamp·d.
 void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   using namespace core::simd;
-  const std::size_t n = p.size(), m = xc_.size();
+  const std::size_t n = p.size(), m = samples_.position.size();
   if (n == 0) return;
   Vec3f* xs = p.predicted.data();
   const std::uint8_t* tf = p.target.data();
   const float mp = ctx_.particle_mass, eps = eps_c_;
-  const bool multi = mass_c_.size() > 1;
+  const bool multi = samples_.mass.size() > 1;
   const __m128 h = broadcast(spiky_.h), h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
   const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
   // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked),
@@ -470,9 +393,9 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     const auto i = static_cast<std::size_t>(ii);
     lambda_[i] = 0.0f;
     xcw_[i].w = 0.0f;
-    const std::uint8_t t = tc_[i];
+    const std::uint8_t t = samples_.target[i];
     if (!active(t, time_)) return;
-    const Vec3f xi = xc_[i];
+    const Vec3f xi = samples_.position[i];
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
     const auto range = cf_.of(i);
     auto r2_of = [&](const Index* j) {
@@ -492,11 +415,11 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
       const __m128 qq = _mm_mul_ps(q, q);
       g2 = _mm_add_ps(g2, select(use, _mm_mul_ps(qq, qq)));  // |∇W|² = kgrad² (h − r)⁴
     });
-    const float c = mp * poly6_.k * hsum(sw) / rho_c_[i] - 1.0f;
+    const float c = mp * poly6_.k * hsum(sw) / samples_.rho_c[i] - 1.0f;
     if (c >= 0.0f) return;
-    const float k = mp / rho_c_[i] * spiky_.kgrad;
+    const float k = mp / samples_.rho_c[i] * spiky_.kgrad;
     lambda_[i] = -c / (k * k * hsum(g2) + eps);
-    xcw_[i].w = phi_[i] * lambda_[i] * mp / rho_c_[i] * kg;
+    xcw_[i].w = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg;
   });
   active_.clear();
   for (std::size_t i = 0; i < m; ++i)
@@ -522,9 +445,9 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     touched_.assign(n, 0);
     const Vec3f* x = p.position.data();  // bonds were decided at the start of the sub-step
     for (Index i : active_) {
-      const std::uint8_t t = tc_[i];
-      const Vec3f xi = xc_[i];
-      const float coef = phi_[i] * lambda_[i] * mp / rho_c_[i] * kg, hs2 = hstar2_[i];
+      const std::uint8_t t = samples_.target[i];
+      const Vec3f xi = samples_.position[i];
+      const float coef = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = hstar2_[i];
       for (Index j : cf_.of(i)) {
         if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
         const Vec3f r = xi - xs[j];

@@ -17,6 +17,7 @@
 // sample order), so a run is bit-identical for any thread count.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
+#include "control/control_samples.h"
 #include "control/control_targets.h"
 #include "control/nearest_seed_field.h"
 #include "control/steering.h"
@@ -50,7 +51,7 @@ class AdaptiveController final : public sim::Controller, public Steerable {
 
  private:
   AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc);
-  bool active(std::uint8_t t, double time) const { return t < start_.size() && time >= start_[t]; }
+  bool active(std::uint8_t t, double time) const { return samples_.started(t, time); }
   void adaptive_spring(sim::ParticleSet& p, float dt) const;
   void control_correction(sim::ParticleSet& p, float dt);
   void gather(sim::ParticleSet& p);
@@ -65,25 +66,8 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   core::Poly6 poly6_;
   core::Spiky spiky_;
   float eps_c_ = 0;   // ε_c = epsilon · S_0
-  float g_ref_ = 0;   // max |Σ_j m_c ∇W(x_ci − x_cj)| over samples (eq. 15 threshold)
-  std::vector<float> mass_c_;  // m_c per target
-  std::vector<double> start_;  // per target
-
-  // Samples of all targets, flattened (SoA).
-  std::vector<Vec3f> xc_;
-  std::vector<float> rho_c_, phi_;  // ρ_c,i; φ̃_i (1 when weights are off)
-  std::vector<std::uint8_t> tc_;    // target of each sample
-  std::vector<Index> orig_;         // sample's index in the targets' concatenated sets (samples are kept sorted
-                                    // by cell for locality; bound_control reports this index)
-  std::vector<Vec3f> grad_c_;       // n at each sample: −Σ_j m_c ∇W(x_ci − x_cj), outward (eq. 16)
-  std::vector<Vec3f> rest_x_, rest_grad_;  // rest pose of xc_ and grad_c_ (moving targets only)
-  std::vector<TargetMotion> motion_;       // per target
-  bool moving_ = false;
-  void move_targets(double time);
-  void flatten();
-  std::vector<std::vector<TargetPhase>> phases_;  // per target: its sample sets in time order
-  std::vector<std::size_t> current_;        // per target: the phase in use
-
+  // Every target's samples at their pose, in cell order, with their normals and g_ref (eq. 15–16).
+  ControlSamples samples_;
   // Per sub-step.
   double time_ = 0.0;
   core::NeighborGrid fluid_grid_;

@@ -4,6 +4,7 @@
 // within a radius, found once per sub-step. The baselines run in the same harness as `adaptive` (same samples,
 // same solver, same per-target rule: a fluid particle only feels the samples of its own target, and only once
 // that target has started), so the table compares control laws and nothing else.
+#include "control/control_samples.h"
 #include "control/control_targets.h"
 #include "control/control_context.h"
 #include "core/neighbor_grid.h"
@@ -24,37 +25,28 @@ class BaselineCore {
   /// True when a swap changed the sample set (indices of the previous set are then invalid).
   bool update(double time, float dt);
   /// Live steering (control/steering.h, the controllers forward to this): target `t` holds `pose` from the next
-  /// update() on. The rest positions are kept for every target (rest_), so a static target can start moving.
+  /// update() on (ControlSamples keeps every target's rest pose, so a static target can start moving).
   void set_target_pose(std::size_t t, const Pose& pose);
-  /// Sample → fluid pairs within r (`sf`), on the fluid positions x; r ≤ the radius given to init.
+  /// Sample → fluid pairs within r (near_fluid), on the fluid positions x; r ≤ the radius given to init.
   void sample_to_fluid(const sim::ParticleSet& p, float r);
-  /// Fluid → sample pairs within r (`fs`), on the fluid positions x.
+  /// Fluid → sample pairs within r (near_samples), on the fluid positions x.
   void fluid_to_sample(const sim::ParticleSet& p, float r);
 
   /// Whether fluid particle j (target tj) and sample i interact: same target, and the target has started.
-  bool pairs(std::uint8_t tj, Index i) const { return tc[i] == tj && live[tj]; }
+  bool pairs(std::uint8_t tj, Index i) const { return samples.target[i] == tj && live[tj]; }
   bool live_target(std::uint8_t t) const { return t < live.size() && live[t]; }
 
   ControlContext ctx;
   float hc = 0.0f;   ///< H_c, the samples' support (the same for every target)
   float d = 0.0f;    ///< fluid spacing
-  // Flattened samples of every target's current phase (index = bound_control's "flattened index").
-  std::vector<Vec3f> xc, uc;     ///< position, velocity (0 for a static target)
-  std::vector<float> rho_c;      ///< ρ_c,i (eq. 9)
-  std::vector<std::uint8_t> tc;  ///< target of each sample
-  std::vector<float> mass_c;     ///< m_c per target
+  /// Every target's current samples (index = bound_control's "flattened index"): position, velocity u_c, ρ_c, target.
+  ControlSamples samples;
   std::vector<std::uint8_t> live;  ///< per target: started at the current time
-  core::NeighborList sf, fs;
+  core::NeighborList near_fluid;    ///< sample → fluid pairs within the radius of the last sample_to_fluid
+  core::NeighborList near_samples;  ///< fluid → sample pairs within the radius of the last fluid_to_sample
   double time = 0.0;
 
  private:
-  void flatten();
-  std::vector<std::vector<TargetPhase>> phases_;
-  std::vector<std::size_t> current_;
-  std::vector<double> start_;
-  std::vector<TargetMotion> motion_;
-  bool moving_ = false;
-  std::vector<Vec3f> rest_;
   core::NeighborGrid fluid_grid_{1.0f}, sample_grid_{1.0f};
   bool sample_grid_valid_ = false;
 };

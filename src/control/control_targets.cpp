@@ -43,14 +43,11 @@ Result<CheckedTargets> check_targets(std::vector<ControlTarget> targets, std::st
 
 double full_gradient_sum(float d, float hc, float particle_mass, double rho_ref) {
   const core::Spiky spiky(hc);
-  const int reach = static_cast<int>(std::ceil(hc / d));
   double s0 = 0.0;
-  for (int k = -reach; k <= reach; ++k)
-    for (int j = -reach; j <= reach; ++j)
-      for (int i = -reach; i <= reach; ++i) {
-        if (!(i || j || k)) continue;
-        s0 += ((particle_mass / rho_ref) * spiky.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
-      }
+  core::for_each_lattice_point(d, hc, [&](int i, int j, int k) {
+    if (i || j || k)
+      s0 += ((particle_mass / rho_ref) * spiky.grad(Vec3f(float(i), float(j), float(k)) * d).cast<double>()).squaredNorm();
+  });
   return s0;
 }
 

@@ -39,7 +39,7 @@ struct DensitySpringConfig {
 class DensitySpringController final : public sim::Controller, public Steerable {
  public:
   /// Live steering (control/steering.h): the shared core moves the samples.
-  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
+  void set_target_pose(std::size_t t, const Pose& pose) override { harness_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<DensitySpringController>> create(std::vector<ControlTarget> targets,
                                                                  const ControlContext& ctx, DensitySpringConfig cfg);
   std::string_view name() const override { return cfg_.name; }
@@ -50,7 +50,7 @@ class DensitySpringController final : public sim::Controller, public Steerable {
   explicit DensitySpringController(DensitySpringConfig cfg) : cfg_(std::move(cfg)) {}
   void sample_weights();
   DensitySpringConfig cfg_;
-  BaselineCore core_;
+  BaselineCore harness_;
   float rho0_ = 0.0f, eps_c_ = 0.0f;
   bool moving_ = false;
   std::vector<float> w_, lambda_;     // per control particle

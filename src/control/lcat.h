@@ -38,7 +38,7 @@ struct LcatParams {
 class LcatController final : public sim::Controller, public Steerable {
  public:
   /// Live steering (control/steering.h): the shared core moves the samples.
-  void set_target_pose(std::size_t t, const Pose& pose) override { core_.set_target_pose(t, pose); }
+  void set_target_pose(std::size_t t, const Pose& pose) override { harness_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<LcatController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                         const LcatParams& params);
   std::string_view name() const override { return "lcat"; }
@@ -50,7 +50,7 @@ class LcatController final : public sim::Controller, public Steerable {
  private:
   explicit LcatController(const LcatParams& params) : params_(params) {}
   LcatParams params_;
-  BaselineCore core_;
+  BaselineCore harness_;
   std::vector<float> delta_;            // δ_t per template particle
   std::vector<std::uint8_t> wants_;     // template particle may spawn (under-filled, no fluid within d/2)
   std::size_t spawned_ = 0;

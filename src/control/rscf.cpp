@@ -12,33 +12,33 @@ Result<std::unique_ptr<RscfController>> RscfController::create(std::vector<Contr
                                                                const ControlContext& ctx, const RscfParams& params) {
   FF_CHECK(params.validate());
   std::unique_ptr<RscfController> c(new RscfController(params));
-  FF_CHECK(c->core_.init(std::move(targets), ctx, "rscf"));
+  FF_CHECK(c->harness_.init(std::move(targets), ctx, "rscf"));
   return c;
 }
 
 void RscfController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
-  core_.update(view.time, view.dt);
-  core_.fluid_to_sample(p, core_.hc);
+  harness_.update(view.time, view.dt);
+  harness_.fluid_to_sample(p, harness_.hc);
 }
 
 void RscfController::add_accelerations(const sim::StepView&, sim::ParticleSet& p) {
-  const core::Poly6 poly6(core_.hc);
-  const core::Spiky spiky(core_.hc);
+  const core::Poly6 poly6(harness_.hc);
+  const core::Spiky spiky(harness_.hc);
   const float kx = params_.position / (kRefDt * kRefDt), kv = params_.velocity / kRefDt;
   const Vec3f* x = p.position.data();
   core::parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     p.bound_control[j] = kInvalidIndex;
     const std::uint8_t t = p.target[j];
-    if (!core_.live_target(t)) return;
+    if (!harness_.live_target(t)) return;
     Vec3f xbar = Vec3f::Zero(), ubar = Vec3f::Zero();
     float wsum = 0.0f, best = INFINITY;
-    for (Index i : core_.fs.of(j)) {
-      if (!core_.pairs(t, i)) continue;
-      const float r2 = (x[j] - core_.xc[i]).squaredNorm();
+    for (Index i : harness_.near_samples.of(j)) {
+      if (!harness_.pairs(t, i)) continue;
+      const float r2 = (x[j] - harness_.samples.position[i]).squaredNorm();
       if (r2 < best) best = r2, p.bound_control[j] = i;
       const float w = poly6.w_r2(r2);
-      xbar += w * core_.xc[i], ubar += w * core_.uc[i], wsum += w;
+      xbar += w * harness_.samples.position[i], ubar += w * harness_.samples.velocity[i], wsum += w;
     }
     if (!(wsum > 0.0f)) return;
     xbar /= wsum, ubar /= wsum;
@@ -46,10 +46,10 @@ void RscfController::add_accelerations(const sim::StepView&, sim::ParticleSet& p
     if (params_.gradient > 0.0f) {
       const Vec3f delta = x[j] - xbar;
       Vec3f gu = Vec3f::Zero();
-      for (Index i : core_.fs.of(j)) {
-        if (!core_.pairs(t, i)) continue;
-        const float vol = core_.mass_c[core_.tc[i]] / core_.rho_c[i];
-        gu += vol * spiky.grad(x[j] - core_.xc[i]).dot(delta) * (core_.uc[i] - ubar);
+      for (Index i : harness_.near_samples.of(j)) {
+        if (!harness_.pairs(t, i)) continue;
+        const float vol = harness_.samples.mass[harness_.samples.target[i]] / harness_.samples.rho_c[i];
+        gu += vol * spiky.grad(x[j] - harness_.samples.position[i]).dot(delta) * (harness_.samples.velocity[i] - ubar);
       }
       ubar += params_.gradient * gu;
     }

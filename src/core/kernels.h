@@ -91,4 +91,16 @@ struct CubicSpline {
   }
 };
 
+/// Calls f(i, j, k) for every point (i d, j d, k d) of the cubic lattice of spacing d within ⌈h/d⌉ cells of the
+/// origin on each axis, the origin included, k outermost: the resting neighbourhood on which PBF's ρ0 and S_0
+/// (sim/pbf_solver.cpp), the control mass (sampling/weights.cpp) and the control S_0 (control/control_targets.cpp)
+/// are calibrated. One visiting order for all, so each sum is the same to the last bit wherever it is taken.
+template <class F>
+void for_each_lattice_point(float d, float h, F&& f) {
+  const int reach = static_cast<int>(std::ceil(h / d));
+  for (int k = -reach; k <= reach; ++k)
+    for (int j = -reach; j <= reach; ++j)
+      for (int i = -reach; i <= reach; ++i) f(i, j, k);
+}
+
 }  // namespace ff::core

@@ -58,11 +58,8 @@ std::vector<float> kernel_sums(std::span<const Vec3f> points, float h) {
 
 double lattice_density(float d, float h, float rest_density) {
   const core::Poly6 w(h);
-  const int reach = static_cast<int>(std::ceil(h / d));
   double sum = 0.0;
-  for (int k = -reach; k <= reach; ++k)
-    for (int j = -reach; j <= reach; ++j)
-      for (int i = -reach; i <= reach; ++i) sum += w.w_r2(d * d * float(i * i + j * j + k * k));
+  core::for_each_lattice_point(d, h, [&](int i, int j, int k) { sum += w.w_r2(d * d * float(i * i + j * j + k * k)); });
   return double(rest_density) * double(d) * d * d * sum;
 }
 

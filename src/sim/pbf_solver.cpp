@@ -25,23 +25,19 @@ PbfSolver::PbfSolver(const SolverParams& params, const Domain& domain)
   const float d = params.spacing(), h = params.support(), r = params.particle_radius;
   mass_ = params.rest_density * d * d * d;
   // Calibrate ρ0 and S_0 on an interior point of the resting cubic lattice the emitter creates.
-  const int reach = static_cast<int>(std::ceil(h / d));
   double sum_w = poly6_.w_zero();
-  for (int k = -reach; k <= reach; ++k)
-    for (int j = -reach; j <= reach; ++j)
-      for (int i = -reach; i <= reach; ++i)
-        if (i || j || k) sum_w += poly6_.w_r2(d * d * float(i * i + j * j + k * k));
+  core::for_each_lattice_point(d, h, [&](int i, int j, int k) {
+    if (i || j || k) sum_w += poly6_.w_r2(d * d * float(i * i + j * j + k * k));
+  });
   rho0_ = static_cast<float>(mass_ * sum_w);
   double s0 = 0.0;
   Vec3d grad_i = Vec3d::Zero();
-  for (int k = -reach; k <= reach; ++k)
-    for (int j = -reach; j <= reach; ++j)
-      for (int i = -reach; i <= reach; ++i) {
-        if (!(i || j || k)) continue;
-        const Vec3f g = (mass_ / rho0_) * spiky_.grad(Vec3f(float(i), float(j), float(k)) * d);
-        s0 += g.squaredNorm();
-        grad_i += g.cast<double>();
-      }
+  core::for_each_lattice_point(d, h, [&](int i, int j, int k) {
+    if (!(i || j || k)) return;
+    const Vec3f g = (mass_ / rho0_) * spiky_.grad(Vec3f(float(i), float(j), float(k)) * d);
+    s0 += g.squaredNorm();
+    grad_i += g.cast<double>();
+  });
   s0 += grad_i.squaredNorm();
   s0_ = static_cast<float>(s0);
   epsilon_ = params.epsilon * s0_;
