@@ -60,9 +60,7 @@ class LcatController final : public sim::Controller, public Steerable {
 /// The controller table's factory (control/registry.h).
 inline Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                                const LcatParams& params) {
-  auto c = LcatController::create(std::move(targets), ctx, params);
-  if (!c) return c.error();
-  return std::unique_ptr<sim::Controller>(std::move(*c));
+  return as_controller(LcatController::create(std::move(targets), ctx, params));
 }
 
 }  // namespace ff::control
