@@ -1,12 +1,16 @@
 // One PBF sub-step (4 iterations, neighbour search and re-sort included) on a dam break at 10k, 100k
 // and 1M particles. Reports particle-steps per second and bytes of solver state per particle.
 //   build/release/bench/bench_pbf_step --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// The second argument picks the Jacobi passes: 0 = neighbour lists (the solver's default), 1 = cluster pairs
+// (Highway kernels, sim/pbf_kernels.h) on the instruction set in the context line (FF_SIMD=sse4|avx2|avx512 pins one).
+#include "core/simd_target.h"
 #include "sim/emitter.h"
 #include "sim/pbf_solver.h"
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace {
 using namespace ff;
@@ -31,6 +35,7 @@ struct DamBreak {
 void BM_PbfStep(benchmark::State& state) {
   DamBreak scene(static_cast<std::size_t>(state.range(0)));
   sim::PbfSolver solver(scene.params, scene.domain);
+  solver.set_cluster_kernels(state.range(1) == 1);
   sim::NoController none;
   sim::StageTimes times;
   const float dt = 1.0f / 120.0f;
@@ -64,8 +69,23 @@ void BM_PbfStep(benchmark::State& state) {
   state.counters["bytes_per_particle"] = double(scene.particles.bytes() + solver.scratch_bytes()) / n;
   state.counters["neighbors_per_particle"] = double(solver.neighbors().total()) / n;
 }
-BENCHMARK(BM_PbfStep)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PbfStep)
+    ->ArgsProduct({{10'000, 100'000, 1'000'000}, {0, 1}})
+    ->ArgNames({"n", "clusters"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  if (const ff::Status s = ff::core::select_simd_target_from_env(); !s.ok()) {
+    std::fprintf(stderr, "%s\n", s.error().message.c_str());
+    return 2;
+  }
+  benchmark::AddCustomContext("simd_target", ff::core::simd_target());
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,5 +1,6 @@
 // fluidform command line (DESIGN.md "The CLI and output contract"): the global flags, one sub-command per file
 // (cmd_*.cpp, app/cli.h), and the default run of the bundled scene when no sub-command is given.
+#include "core/simd_target.h"
 #include "app/cli.h"
 
 #include <CLI/CLI.hpp>
@@ -15,6 +16,12 @@ int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("fluidform");
   spdlog::set_default_logger(logger);
   spdlog::set_pattern(::isatty(2) ? "%^%l%$: %v" : "[%H:%M:%S] %l: %v");
+
+  // FF_SIMD pins the instruction set of the Highway kernels (core/simd_target.h); a bad value stops here.
+  if (const ff::Status s = ff::core::select_simd_target_from_env(); !s.ok()) {
+    spdlog::error("{}", s.error().message);
+    return 2;
+  }
 
   CLI::App app{"fluidform: editable mesh animations from controllable particles"};
   app.set_version_flag("--version", FF_VERSION);

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace ff::control {
 using core::parallel_for;
@@ -424,6 +425,19 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   active_.clear();
   for (std::size_t i = 0; i < m; ++i)
     if (lambda_[i] > 0.0f) active_.push_back(static_cast<Index>(i));
+  // FF_DEBUG_ACTIVE=1: the active set of every iteration on stderr (bench/RESULTS.md, "Where the formed frame's time
+  // goes"): how many samples have λ > 0, how many were under-filled at the start of the sub-step, and how many
+  // started clearly over-full (ρ_p/ρ_c ≥ 1.05), the ones an active-set rule with a 5 % margin could skip.
+  if (std::getenv("FF_DEBUG_ACTIVE")) {
+    std::size_t under = 0, over = 0, over_active = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      under += fill_[i] < 1.0f;
+      over += fill_[i] >= 1.05f;
+      over_active += fill_[i] >= 1.05f && lambda_[i] > 0.0f;
+    }
+    fmt::print(stderr, "adaptive t={:.4f}: {} samples, λ > 0: {}, under-filled at start: {}, over-full ≥ 1.05: {} ({} with λ > 0)\n",
+               time_, m, active_.size(), under, over, over_active);
+  }
   if (active_.empty()) return;  // every sample is full: no correction anywhere
 
   const float alpha = params_.alpha, max_dx = params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt),

@@ -20,6 +20,15 @@ void parallel_for(std::int64_t n, F&& f) {
   for (std::int64_t i = 0; i < n; ++i) f(i);
 }
 
+/// Runs f(begin, end) over [0, n) in blocks of `block`, handed out dynamically (the cluster kernels: blocks differ
+/// in work, and each block writes only its own outputs, so the schedule never changes a result).
+template <class F>
+void parallel_blocks(std::int64_t n, std::int64_t block, F&& f) {
+  const std::int64_t blocks = (n + block - 1) / block;
+#pragma omp parallel for schedule(dynamic, 1) if (n * 8 >= kMinParallel)
+  for (std::int64_t b = 0; b < blocks; ++b) f(b * block, std::min(n, (b + 1) * block));
+}
+
 /// Chunk size of deterministic reductions: fixed, so the summation tree is the same for any thread count.
 inline constexpr std::int64_t kReduceChunk = 4096;
 

@@ -5,6 +5,7 @@
 #include "core/pair_loop.h"
 #include "sim/drag.h"
 #include "sim/pbf_constraints.h"
+#include "sim/pbf_kernels.h"
 
 #include <Eigen/Geometry>  // cross product (vorticity)
 #include <fmt/format.h>
@@ -50,7 +51,8 @@ std::size_t PbfSolver::scratch_bytes() const {
   return neighbors_.bytes() + grid_.bytes() + next_.capacity() * sizeof(Vec3f) + omega_.capacity() * sizeof(Vec3f) +
          reorder_scratch_.v3.capacity() * sizeof(Vec3f) + reorder_scratch_.u32.capacity() * sizeof(Index) +
          reorder_scratch_.u8.capacity() + reorder_scratch_.f32.capacity() * sizeof(float) + surface_tension_.bytes() +
-         surface_candidates_.capacity();
+         surface_candidates_.capacity() + clusters_.bytes() + pairs_.bytes() +
+         lambda_c_.capacity() * sizeof(float);
 }
 
 void PbfSolver::search(ParticleSet& p) {
@@ -59,6 +61,11 @@ void PbfSolver::search(ParticleSet& p) {
   reorder(p, grid_.sorted(), reorder_scratch_);
   grid_.points_were_sorted();
   grid_.neighbors(p.position, neighbors_);
+  // The Jacobi passes' cluster pairs, on the sorted positions (reused by every iteration of the sub-step).
+  if (cluster_kernels_) {
+    clusters_.assign(p.position, params_.spacing());
+    core::build_cluster_pairs(clusters_, clusters_, params_.support(), pairs_, pair_scratch_);
+  }
 }
 
 void PbfSolver::densities(std::span<const Vec3f> x, std::vector<float>& rho, std::uint8_t* candidates) const {
@@ -199,7 +206,7 @@ void PbfSolver::clamp_to_walls(std::vector<Vec3f>& x) const {
 // The two Jacobi passes run four neighbours at a time (sim/pair_loop.h). Lanes outside the support
 // (a neighbour list is built on x at the start of the sub-step, the passes use x*) or at zero distance
 // are masked off, which matches the scalar definitions: W and ∇W vanish at r ≥ h, ∇W is 0 at r = 0.
-void PbfSolver::solve_iteration(ParticleSet& p) {
+void PbfSolver::solve_iteration_lists(ParticleSet& p) {
   using namespace core::simd;
   const std::size_t n = p.size();
   const Vec3f* xs = p.predicted.data();
@@ -287,6 +294,36 @@ void PbfSolver::solve_iteration(ParticleSet& p) {
     case 7: positions(std::integral_constant<int, 7>{}); break;
     default: positions(std::integral_constant<int, 8>{}); break;
   }
+  p.predicted.swap(next_);
+}
+
+// The alternative (PbfSolver::set_cluster_kernels): the two Jacobi passes on cluster pairs (sim/pbf_kernels.h): the list is built on x at the start of the
+// sub-step, the passes use x*, and lanes outside the support or at zero distance are masked, which matches the
+// scalar definitions: W and ∇W vanish at r ≥ h, ∇W is 0 at r = 0.
+void PbfSolver::solve_iteration(ParticleSet& p) {
+  if (!cluster_kernels_) return solve_iteration_lists(p);
+  clusters_.update(p.predicted);
+  lambda_c_.resize(clusters_.padded());
+  PbfLambdaConsts lk;
+  lk.h = spiky_.h, lk.h2 = spiky_.h2, lk.poly6_k = poly6_.k, lk.w0 = poly6_.w_zero();
+  lk.mass = mass_, lk.rho0 = rho0_, lk.epsilon = epsilon_;
+  // ∇_j C_i = (m/ρ0) ∇W_ij with ∇W = kgrad (h − |r|)² r/|r|: one coefficient per pair times r.
+  lk.cgrad = mass_ / rho0_ * spiky_.kgrad;
+  const auto nc = static_cast<std::int64_t>(clusters_.clusters);
+  core::parallel_blocks(nc, kClusterBlock, [&](std::int64_t b, std::int64_t e) {
+    pbf_lambda_clusters(clusters_, pairs_, lk, p.density.data(), lambda_c_.data(), static_cast<std::size_t>(b),
+                        static_cast<std::size_t>(e));
+  });
+  // Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j),  s_corr = −k (W/W(Δq))ⁿ / S_0.
+  PbfDeltaConsts dk;
+  dk.h = spiky_.h, dk.h2 = spiky_.h2, dk.kgrad = spiky_.kgrad, dk.w_ratio = poly6_.k / w_dq_;
+  dk.scorr_c = -params_.scorr_k / s0_, dk.scorr_n = params_.scorr_k > 0.0f ? params_.scorr_n : 0;
+  dk.m_rho0 = mass_ / rho0_, dk.lo = wall_lo_, dk.hi = wall_hi_;
+  // Jacobi: the corrected positions go to a second buffer, which then becomes x*.
+  core::parallel_blocks(nc, kClusterBlock, [&](std::int64_t b, std::int64_t e) {
+    pbf_delta_clusters(clusters_, pairs_, lambda_c_.data(), dk, next_.data(), static_cast<std::size_t>(b),
+                       static_cast<std::size_t>(e));
+  });
   p.predicted.swap(next_);
 }
 

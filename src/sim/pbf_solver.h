@@ -21,6 +21,7 @@
 //
 // Every loop is a gather over CSR neighbour lists with a static schedule and every reduction is a
 // fixed-order sum, so a run is bit-identical for any thread count.
+#include "core/clusters.h"
 #include "core/error.h"
 #include "core/kernels.h"
 #include "core/neighbor_grid.h"
@@ -73,6 +74,10 @@ class PbfSolver {
   /// Bytes of solver scratch (neighbour lists, grid, buffers): for the memory budget.
   std::size_t scratch_bytes() const;
   const core::NeighborList& neighbors() const { return neighbors_; }
+  /// The Jacobi passes on cluster pairs (Highway kernels, sim/pbf_kernels.h) instead of the neighbour lists. Off by
+  /// default: at H_p = 2d a cluster pair's lanes are ~13 % useful and the passes run slower on the machines we
+  /// measured (bench_pair_kernels, bench/RESULTS.md); kept for that benchmark and its test.
+  void set_cluster_kernels(bool on) { cluster_kernels_ = on; }
 
  private:
   void search(ParticleSet& p);
@@ -81,6 +86,7 @@ class PbfSolver {
   void external_accelerations(ParticleSet& p, float dt, double time);
   void xsph_accelerations(ParticleSet& p, float dt, const DragModel* drag) const;
   void solve_iteration(ParticleSet& p);
+  void solve_iteration_lists(ParticleSet& p);
   void clamp_to_walls(std::vector<Vec3f>& x) const;
   void vorticity_confinement(ParticleSet& p, float dt);
 
@@ -93,6 +99,13 @@ class PbfSolver {
   core::NeighborGrid grid_;
   core::NeighborList neighbors_;
   ReorderScratch reorder_scratch_;
+  // Cluster pairs of the fluid within H_p (core/clusters.h), built per sub-step; λ in the clusters' layout.
+  bool cluster_kernels_ = false;
+  core::ClusterSet clusters_;
+  core::ClusterPairs pairs_;
+  core::ClusterPairScratch pair_scratch_;
+  core::Buffer<float> lambda_c_;
+  static constexpr std::int64_t kClusterBlock = 16;  // clusters per scheduled block (~128 particles)
   std::vector<Vec3f> next_;        // x* after the current iteration (Jacobi double buffer)
   std::vector<Vec3f> omega_;       // vorticity (only when enabled)
   SurfaceTension surface_tension_; // per-particle normals and curvatures (only when σ > 0)
