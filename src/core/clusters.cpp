@@ -128,7 +128,7 @@ void build_cluster_pairs(const ClusterSet& a, const ClusterSet& b, float r, Clus
   std::partial_sum(start.begin(), start.end(), start.begin());
   list.resize(start.back());
   {
-    auto& cur = scratch.key;
+    auto& cur = scratch.cursor;
     cur.assign(start.begin(), start.end() - 1);
     for (std::size_t c = 0; c < b.clusters; ++c)
       for_cells(b.lo[c], b.hi[c], [&](std::size_t k) { list[cur[k]++] = static_cast<Index>(c); });

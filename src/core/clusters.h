@@ -39,12 +39,6 @@ struct ClusterSet {
   void assign(std::span<const Vec3f> p, float spacing);
   /// Coordinates only, same clusters (the boxes stay those of assign()): the moved positions x* of a sub-step.
   void update(std::span<const Vec3f> p);
-  /// out[lane] = v[point[lane]] (padding: `pad`), for per-point values a kernel reads per lane.
-  template <class T>
-  void pack(std::span<const T> v, T pad, Buffer<T>& out) const {
-    out.resize(padded());
-    for (std::size_t k = 0; k < padded(); ++k) out[k] = point[k] == kInvalidIndex ? pad : v[point[k]];
-  }
   std::size_t padded() const { return clusters * kClusterWidth; }
   std::size_t bytes() const;
 };
@@ -61,7 +55,7 @@ struct ClusterPairs {
 
 /// Reusable scratch of build_cluster_pairs (a grid of B's cluster centres).
 struct ClusterPairScratch {
-  std::vector<Index> cell_start, order, key;
+  std::vector<Index> cell_start, order, cursor;
 };
 
 /// For every cluster of `a`: the clusters of `b` whose bounding boxes are closer than `r` (a == b lists a

@@ -31,6 +31,16 @@ HWY_INLINE V inv_sqrt(D d, V r2) {
   return hn::Mul(y, hn::NegMulAdd(hn::Mul(hn::Set(d, 0.5f), r2), hn::Mul(y, y), hn::Set(d, 1.5f)));
 }
 
+// x_i − x_j for the lanes of a j-cluster starting at `base` (one contiguous load per axis), and |x_i − x_j|².
+struct Offsets {
+  hn::Vec<D> x, y, z, r2;
+};
+template <class V>
+HWY_INLINE Offsets offsets(D d, V px, V py, V pz, const float* X, const float* Y, const float* Z, std::size_t base) {
+  const V rx = hn::Sub(px, hn::Load(d, X + base)), ry = hn::Sub(py, hn::Load(d, Y + base)), rz = hn::Sub(pz, hn::Load(d, Z + base));
+  return {rx, ry, rz, hn::MulAdd(rz, rz, hn::MulAdd(ry, ry, hn::Mul(rx, rx)))};
+}
+
 // Whether point (x, y, z) is at least r from cluster c's box: then none of its lanes is in range.
 HWY_INLINE bool beyond(const core::ClusterSet& s, Index c, float x, float y, float z, float r2) {
   const Vec3f& lo = s.lo[c];
@@ -62,9 +72,8 @@ void LambdaClusters(const core::ClusterSet& s, const core::ClusterPairs& pairs, 
         if (beyond(s, jc, X[li], Y[li], Z[li], k.h2)) continue;
         for (std::size_t o = 0; o < kClusterWidth; o += N) {
           const std::size_t base = jc * kClusterWidth + o;
-          const auto rx = hn::Sub(px, hn::Load(d, X + base)), ry = hn::Sub(py, hn::Load(d, Y + base)),
-                     rz = hn::Sub(pz, hn::Load(d, Z + base));
-          const auto r2 = hn::MulAdd(rz, rz, hn::MulAdd(ry, ry, hn::Mul(rx, rx)));
+          const Offsets r = offsets(d, px, py, pz, X, Y, Z, base);
+          const auto rx = r.x, ry = r.y, rz = r.z, r2 = r.r2;
           auto inside = hn::Lt(r2, h2);
           if (jc == c) inside = hn::And(inside, hn::RebindMask(d, hn::Ne(hn::Iota(di, static_cast<std::int32_t>(base)), self)));
           if (hn::AllFalse(d, inside)) continue;
@@ -107,9 +116,8 @@ void DeltaImpl(const core::ClusterSet& s, const core::ClusterPairs& pairs, const
         if (beyond(s, jc, X[li], Y[li], Z[li], k.h2)) continue;
         for (std::size_t o = 0; o < kClusterWidth; o += N) {
           const std::size_t base = jc * kClusterWidth + o;
-          const auto rx = hn::Sub(px, hn::Load(d, X + base)), ry = hn::Sub(py, hn::Load(d, Y + base)),
-                     rz = hn::Sub(pz, hn::Load(d, Z + base));
-          const auto r2 = hn::MulAdd(rz, rz, hn::MulAdd(ry, ry, hn::Mul(rx, rx)));
+          const Offsets r = offsets(d, px, py, pz, X, Y, Z, base);
+          const auto rx = r.x, ry = r.y, rz = r.z, r2 = r.r2;
           // r = 0 (itself, or a coincident particle) has no gradient; beyond h none either.
           const auto use = hn::And(hn::Lt(r2, h2), hn::Gt(r2, zero));
           if (hn::AllFalse(d, use)) continue;
