@@ -115,6 +115,129 @@ Status GlbOptions::validate(std::size_t frames) const {
   return {};
 }
 
+namespace {
+
+Status check_glb_frame(const TriangleMesh& m, std::size_t k) {
+  for (const auto& t : m.triangles)
+    for (Index v : t)
+      if (v >= m.vertices.size())
+        return input_error(fmt::format("glb: frame {} has a triangle that refers to vertex {} of {}", k, v, m.vertices.size()));
+  if (m.triangles.empty()) return {};
+  for (const auto& v : m.vertices)
+    if (!v.allFinite()) return input_error(fmt::format("glb: frame {} has a non-finite vertex", k));
+  return {};
+}
+
+/// POSITION and NORMAL of one frame as 16-bit and 8-bit snorms (KHR_mesh_quantization). Positions map to [−1, 1]³
+/// of the bounding box and are dequantized by a child node's translation and scale, returned in `mesh_node`
+/// (so the frame node's own scale stays free for the visibility animation).
+json quantized_attributes(GlbBuilder& b, const TriangleMesh& m, const std::vector<Vec3f>& normals, const Aabb& box,
+                          std::size_t mesh_index, std::size_t k, json& mesh_node) {
+  const std::size_t nv = m.vertices.size();
+  json attributes;
+  const Vec3f c = 0.5f * (box.min + box.max);
+  const Vec3f h = (0.5f * (box.max - box.min)).cwiseMax(Vec3f::Constant(1e-12f));
+  std::vector<std::int16_t> q(4 * nv, 0);  // stride 8: vertex attributes must be 4-byte aligned
+  std::array<int, 3> lo{32767, 32767, 32767}, hi{-32767, -32767, -32767};
+  for (std::size_t i = 0; i < nv; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const std::int16_t v = snorm16((m.vertices[i][a] - c[a]) / h[a]);
+      q[4 * i + static_cast<std::size_t>(a)] = v;
+      lo[static_cast<std::size_t>(a)] = std::min<int>(lo[static_cast<std::size_t>(a)], v);
+      hi[static_cast<std::size_t>(a)] = std::max<int>(hi[static_cast<std::size_t>(a)], v);
+    }
+  const int pv = b.view(q.data(), q.size() * sizeof(std::int16_t), kArrayBuffer, 8);
+  // min/max of a normalized accessor are its stored integers (the validator checks them so).
+  attributes["POSITION"] = b.accessor(pv, kShort, nv, "VEC3", {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, true);
+  std::vector<std::int8_t> qn(4 * nv, 0);
+  for (std::size_t i = 0; i < nv; ++i)
+    for (int a = 0; a < 3; ++a) qn[4 * i + static_cast<std::size_t>(a)] = snorm8(normals[i][a]);
+  const int nview = b.view(qn.data(), qn.size(), kArrayBuffer, 4);
+  attributes["NORMAL"] = b.accessor(nview, kByte, nv, "VEC3", nullptr, nullptr, true);
+  mesh_node = {{"name", fmt::format("frame_{:05d}_mesh", k)}, {"mesh", mesh_index},
+               {"translation", {c.x(), c.y(), c.z()}}, {"scale", {h.x(), h.y(), h.z()}}};
+  return attributes;
+}
+
+/// POSITION and NORMAL of one frame as floats.
+json float_attributes(GlbBuilder& b, const TriangleMesh& m, const std::vector<Vec3f>& normals, const Aabb& box) {
+  const std::size_t nv = m.vertices.size();
+  json attributes;
+  const int pv = b.view(m.vertices.data(), nv * sizeof(Vec3f), kArrayBuffer);
+  attributes["POSITION"] = b.accessor(pv, kFloat, nv, "VEC3", {box.min.x(), box.min.y(), box.min.z()},
+                                      {box.max.x(), box.max.y(), box.max.z()});
+  const int nview = b.view(normals.data(), nv * sizeof(Vec3f), kArrayBuffer);
+  attributes["NORMAL"] = b.accessor(nview, kFloat, nv, "VEC3");
+  return attributes;
+}
+
+/// The index accessor: 16-bit while the vertices allow it, else 32-bit.
+int index_accessor(GlbBuilder& b, const TriangleMesh& m) {
+  if (m.vertices.size() <= 65535) {
+    std::vector<std::uint16_t> idx;
+    idx.reserve(3 * m.triangles.size());
+    for (const auto& t : m.triangles)
+      for (Index v : t) idx.push_back(static_cast<std::uint16_t>(v));
+    return b.accessor(b.view(idx.data(), idx.size() * 2, kElementArrayBuffer), kUnsignedShort, idx.size(), "SCALAR");
+  }
+  return b.accessor(b.view(m.triangles.data(), m.triangles.size() * 12, kElementArrayBuffer), kUnsignedInt,
+                    3 * m.triangles.size(), "SCALAR");
+}
+
+/// Visibility: node k is scaled 1 on [t_k, t_{k+1}) and 0 elsewhere, with STEP keys (the first frame from 0, the
+/// last one for 1/fps after its time, which is where the clip ends). One 0→1→0 sampler per frame; `frame_nodes[k]`
+/// is frame k's node. Empty for a single frame.
+json visibility_animation(GlbBuilder& b, const std::vector<float>& t, const json& frame_nodes, double fps) {
+  json channels = json::array(), samplers = json::array();
+  if (t.size() < 2) return nullptr;
+  const float t0 = std::min(0.0f, t[0]);
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    std::vector<float> keys, scales;
+    auto key = [&](float time, float s) {
+      keys.push_back(time);
+      scales.insert(scales.end(), {s, s, s});
+    };
+    if (k == 0) {
+      key(t0, 1.0f);
+      key(t[1], 0.0f);
+    } else {
+      key(t0, 0.0f);
+      key(t[k], 1.0f);
+      // The last frame holds for one frame time, so the clip (and a loop of it) shows it like every other.
+      key(k + 1 < t.size() ? t[k + 1] : t[k] + static_cast<float>(1.0 / fps), k + 1 < t.size() ? 0.0f : 1.0f);
+    }
+    // An input accessor needs min and max; the keys ascend.
+    const int in = b.accessor(b.view(keys.data(), keys.size() * 4), kFloat, keys.size(), "SCALAR", {keys.front()}, {keys.back()});
+    const int out = b.accessor(b.view(scales.data(), scales.size() * 4), kFloat, keys.size(), "VEC3");
+    samplers.push_back({{"input", in}, {"output", out}, {"interpolation", "STEP"}});
+    channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", frame_nodes[k]}, {"path", "scale"}}}});
+  }
+  return {{"name", "forming"}, {"channels", channels}, {"samplers", samplers}};
+}
+
+/// The GLB container: header, the JSON chunk (space-padded) and the BIN chunk (zero-padded by the builder).
+Result<std::vector<std::uint8_t>> pack_glb(const json& doc, const std::vector<std::uint8_t>& bin) {
+  std::string text = doc.dump();
+  while (text.size() % 4) text.push_back(' ');
+  const std::size_t total = 12 + 8 + text.size() + 8 + bin.size();
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    return param_error(fmt::format("glb: {} bytes is more than a GLB can hold (4 GiB); mesh fewer frames", total));
+  std::vector<std::uint8_t> out;
+  out.reserve(total);
+  put<std::uint32_t>(out, 0x46546C67u);  // "glTF"
+  put<std::uint32_t>(out, 2);
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(total));
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(text.size()));
+  put<std::uint32_t>(out, 0x4E4F534Au);  // "JSON"
+  out.insert(out.end(), text.begin(), text.end());
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(bin.size()));
+  put<std::uint32_t>(out, 0x004E4942u);  // "BIN\0"
+  out.insert(out.end(), bin.begin(), bin.end());
+  return out;
+}
+
+}  // namespace
+
 Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& o) {
   FF_CHECK(o.validate(frames.size()));
   if (frames.empty()) return param_error("glb: no frames to write");
@@ -122,13 +245,9 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
   json nodes = json::array(), meshes = json::array();
   json root = {{"name", "fluidform"}, {"children", json::array()}};
   nodes.push_back(root);
-  const auto time_of = [&](std::size_t k) { return o.times.empty() ? double(k) / o.fps : o.times[k]; };
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const TriangleMesh& m = frames[k];
-    for (const auto& t : m.triangles)
-      for (Index v : t)
-        if (v >= m.vertices.size())
-          return input_error(fmt::format("glb: frame {} has a triangle that refers to vertex {} of {}", k, v, m.vertices.size()));
+    FF_CHECK(check_glb_frame(m, k));
     json node = {{"name", fmt::format("frame_{:05d}", k)}};
     // Static pose (no animation playing): the last frame, the formed shape.
     if (k + 1 != frames.size()) node["scale"] = {0.0, 0.0, 0.0};
@@ -136,56 +255,13 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
     nodes[0]["children"].push_back(node_index);
     nodes.push_back(node);
     if (m.triangles.empty()) continue;
-    for (const auto& v : m.vertices)
-      if (!v.allFinite()) return input_error(fmt::format("glb: frame {} has a non-finite vertex", k));
-    const std::size_t nv = m.vertices.size();
     const std::vector<Vec3f> normals = vertex_normals(m);
     Aabb box;
     for (const auto& v : m.vertices) box.extend(v);
-    json attributes;
     json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
-    if (o.quantize) {
-      // Positions → [−1, 1]³ of the bounding box, dequantized by a child node's translation and scale (so the
-      // frame node's own scale stays free for the visibility animation).
-      const Vec3f c = 0.5f * (box.min + box.max);
-      const Vec3f h = (0.5f * (box.max - box.min)).cwiseMax(Vec3f::Constant(1e-12f));
-      std::vector<std::int16_t> q(4 * nv, 0);  // stride 8: vertex attributes must be 4-byte aligned
-      std::array<int, 3> lo{32767, 32767, 32767}, hi{-32767, -32767, -32767};
-      for (std::size_t i = 0; i < nv; ++i)
-        for (int a = 0; a < 3; ++a) {
-          const std::int16_t v = snorm16((m.vertices[i][a] - c[a]) / h[a]);
-          q[4 * i + static_cast<std::size_t>(a)] = v;
-          lo[static_cast<std::size_t>(a)] = std::min<int>(lo[static_cast<std::size_t>(a)], v);
-          hi[static_cast<std::size_t>(a)] = std::max<int>(hi[static_cast<std::size_t>(a)], v);
-        }
-      const int pv = b.view(q.data(), q.size() * sizeof(std::int16_t), kArrayBuffer, 8);
-      // min/max of a normalized accessor are its stored integers (the validator checks them so).
-      attributes["POSITION"] = b.accessor(pv, kShort, nv, "VEC3", {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, true);
-      std::vector<std::int8_t> qn(4 * nv, 0);
-      for (std::size_t i = 0; i < nv; ++i)
-        for (int a = 0; a < 3; ++a) qn[4 * i + static_cast<std::size_t>(a)] = snorm8(normals[i][a]);
-      const int nview = b.view(qn.data(), qn.size(), kArrayBuffer, 4);
-      attributes["NORMAL"] = b.accessor(nview, kByte, nv, "VEC3", nullptr, nullptr, true);
-      mesh_node = {{"name", fmt::format("frame_{:05d}_mesh", k)}, {"mesh", meshes.size()},
-                   {"translation", {c.x(), c.y(), c.z()}}, {"scale", {h.x(), h.y(), h.z()}}};
-    } else {
-      const int pv = b.view(m.vertices.data(), nv * sizeof(Vec3f), kArrayBuffer);
-      attributes["POSITION"] = b.accessor(pv, kFloat, nv, "VEC3", {box.min.x(), box.min.y(), box.min.z()},
-                                          {box.max.x(), box.max.y(), box.max.z()});
-      const int nview = b.view(normals.data(), nv * sizeof(Vec3f), kArrayBuffer);
-      attributes["NORMAL"] = b.accessor(nview, kFloat, nv, "VEC3");
-    }
-    int indices;
-    if (nv <= 65535) {
-      std::vector<std::uint16_t> idx;
-      idx.reserve(3 * m.triangles.size());
-      for (const auto& t : m.triangles)
-        for (Index v : t) idx.push_back(static_cast<std::uint16_t>(v));
-      indices = b.accessor(b.view(idx.data(), idx.size() * 2, kElementArrayBuffer), kUnsignedShort, idx.size(), "SCALAR");
-    } else {
-      indices = b.accessor(b.view(m.triangles.data(), m.triangles.size() * 12, kElementArrayBuffer), kUnsignedInt,
-                           3 * m.triangles.size(), "SCALAR");
-    }
+    const json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
+                                       : float_attributes(b, m, normals, box);
+    const int indices = index_accessor(b, m);
     meshes.push_back({{"name", fmt::format("frame_{:05d}", k)},
                       {"primitives", {{{"attributes", attributes}, {"indices", indices}, {"material", 0}, {"mode", 4}}}}});
     if (mesh_node.is_null()) {
@@ -195,36 +271,10 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
       nodes.push_back(mesh_node);
     }
   }
-
-  // Visibility: node k is scaled 1 on [t_k, t_{k+1}) and 0 elsewhere, with STEP keys (the first frame from 0, the
-  // last one for 1/fps after its time, which is where the clip ends). One 0→1→0 sampler per frame.
-  json channels = json::array(), samplers = json::array();
-  if (frames.size() > 1) {
-    std::vector<float> t(frames.size());
-    for (std::size_t k = 0; k < frames.size(); ++k) t[k] = static_cast<float>(time_of(k));
-    const float t0 = std::min(0.0f, t[0]);
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-      std::vector<float> keys, scales;
-      auto key = [&](float time, float s) {
-        keys.push_back(time);
-        scales.insert(scales.end(), {s, s, s});
-      };
-      if (k == 0) {
-        key(t0, 1.0f);
-        key(t[1], 0.0f);
-      } else {
-        key(t0, 0.0f);
-        key(t[k], 1.0f);
-        // The last frame holds for one frame time, so the clip (and a loop of it) shows it like every other.
-        key(k + 1 < frames.size() ? t[k + 1] : t[k] + static_cast<float>(1.0 / o.fps), k + 1 < frames.size() ? 0.0f : 1.0f);
-      }
-      // An input accessor needs min and max; the keys ascend.
-      const int in = b.accessor(b.view(keys.data(), keys.size() * 4), kFloat, keys.size(), "SCALAR", {keys.front()}, {keys.back()});
-      const int out = b.accessor(b.view(scales.data(), scales.size() * 4), kFloat, keys.size(), "VEC3");
-      samplers.push_back({{"input", in}, {"output", out}, {"interpolation", "STEP"}});
-      channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", nodes[0]["children"][k]}, {"path", "scale"}}}});
-    }
-  }
+  std::vector<float> times(frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    times[k] = static_cast<float>(o.times.empty() ? double(k) / o.fps : o.times[k]);
+  const json animation = visibility_animation(b, times, nodes[0]["children"], o.fps);
 
   while (b.bin.size() % 4) b.bin.push_back(0);
   json doc = {{"asset", {{"version", "2.0"}, {"generator", "fluidform"}}},
@@ -239,28 +289,12 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"bufferViews", b.views},
               {"accessors", b.accessors}};
   if (!meshes.empty()) doc["meshes"] = meshes;
-  if (!channels.empty()) doc["animations"] = {{{"name", "forming"}, {"channels", channels}, {"samplers", samplers}}};
+  if (!animation.is_null()) doc["animations"] = json::array({animation});
   if (o.quantize && !meshes.empty()) {
     doc["extensionsUsed"] = {"KHR_mesh_quantization"};
     doc["extensionsRequired"] = {"KHR_mesh_quantization"};
   }
-  std::string text = doc.dump();
-  while (text.size() % 4) text.push_back(' ');
-  const std::size_t total = 12 + 8 + text.size() + 8 + b.bin.size();
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    return param_error(fmt::format("glb: {} bytes is more than a GLB can hold (4 GiB); mesh fewer frames", total));
-  std::vector<std::uint8_t> out;
-  out.reserve(total);
-  put<std::uint32_t>(out, 0x46546C67u);  // "glTF"
-  put<std::uint32_t>(out, 2);
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(total));
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(text.size()));
-  put<std::uint32_t>(out, 0x4E4F534Au);  // "JSON"
-  out.insert(out.end(), text.begin(), text.end());
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(b.bin.size()));
-  put<std::uint32_t>(out, 0x004E4942u);  // "BIN\0"
-  out.insert(out.end(), b.bin.begin(), b.bin.end());
-  return out;
+  return pack_glb(doc, b.bin);
 }
 
 Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh> frames, const GlbOptions& options) {

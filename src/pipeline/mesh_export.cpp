@@ -81,43 +81,39 @@ Result<float> estimate_spacing(std::span<const Vec3f> points) {
   return input_error("cannot estimate the particle spacing (the particles are too scattered); give --spacing");
 }
 
-Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::path& out, const MeshOptions& o,
-                                  core::Progress& progress) {
-  FF_CHECK(o.validate());
-  if (frames.empty()) return input_error("mesh: no particle frames");
-  core::Stopwatch watch;
-  MeshSummary sum;
-  sum.frames_read = frames.size();
-  FF_CHECK(io::ensure_writable_dir(out));
-  FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+namespace {
 
-  // The frames to mesh: every k-th and the last, or only the last.
+// The frames to mesh: every k-th and the last, or only the last.
+std::vector<std::size_t> chosen_frames(std::size_t count, const MeshOptions& o) {
   std::vector<std::size_t> chosen;
   if (o.final_only) {
-    chosen.push_back(frames.size() - 1);
+    chosen.push_back(count - 1);
   } else {
-    for (std::size_t k = 0; k < frames.size(); k += static_cast<std::size_t>(o.every)) chosen.push_back(k);
-    if (chosen.back() != frames.size() - 1) chosen.push_back(frames.size() - 1);
+    for (std::size_t k = 0; k < count; k += static_cast<std::size_t>(o.every)) chosen.push_back(k);
+    if (chosen.back() != count - 1) chosen.push_back(count - 1);
   }
+  return chosen;
+}
 
-  // The spacing: given, else from the last frame's header, else estimated from it.
-  auto last = io::read_particles_ply(frames.back());
-  if (!last) return last.error();
+// The spacing: given, else from the last frame's header, else estimated from it.
+Result<float> frame_spacing(const io::ParticleFrame& last, const fs::path& file, const MeshOptions& o, MeshSummary& sum) {
   float d = o.spacing;
-  {
-    if (d == 0.0f) d = spacing_from_comments(*last);
-    if (d == 0.0f) {
-      auto est = estimate_spacing(last->positions);
-      if (!est) return Error{est.error().kind, fmt::format("{}: {}", frames.back().string(), est.error().message)};
-      d = *est;
-      sum.spacing_estimated = true;
-      spdlog::info("mesh: particle spacing estimated from the particles: {:.4g} m (give --spacing to set it)", d);
-    }
+  if (d == 0.0f) d = spacing_from_comments(last);
+  if (d == 0.0f) {
+    auto est = estimate_spacing(last.positions);
+    if (!est) return Error{est.error().kind, fmt::format("{}: {}", file.string(), est.error().message)};
+    d = *est;
+    sum.spacing_estimated = true;
+    spdlog::info("mesh: particle spacing estimated from the particles: {:.4g} m (give --spacing to set it)", d);
   }
-  sum.spacing = d;
+  return d;
+}
 
-  // Reconstruct several frames at once, one thread each (reconstruct() is deterministic for any thread count, so
-  // the meshes do not depend on how frames are spread).
+// Reconstructs the chosen frames (and writes their OBJs), several at once, one thread each: reconstruct() is
+// deterministic for any thread count, so the meshes do not depend on how frames are spread.
+Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::path> frames, std::span<const std::size_t> chosen,
+                                                         const fs::path& out, float d, const MeshOptions& o,
+                                                         surface::SurfaceStats& last_stats, core::Progress& progress) {
   std::vector<io::TriangleMesh> meshes(chosen.size());
   std::vector<Error> errors(chosen.size());
   std::vector<char> failed(chosen.size(), 0);
@@ -152,13 +148,64 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   if (cancelled) return Error{Error::Kind::Cancelled, "mesh: cancelled"};
   for (std::size_t c = 0; c < chosen.size(); ++c)
     if (failed[c]) return errors[c];
+  last_stats = stats.back();
+  return meshes;
+}
+
+// Every particle frame, in order, as one PC2 point cache and its frame-0 point mesh. Particles are written sorted
+// by id, so entry i is the same particle in every frame; a frame with fewer particles (an emitter still filling)
+// is padded with the last frame's positions of the missing ones.
+Status write_point_cache(std::span<const fs::path> frames, const io::ParticleFrame& last, const fs::path& out) {
+  const std::size_t n = last.positions.size();
+  io::Pc2Writer pc2;
+  FF_CHECK(pc2.open(out / "particles.pc2", n, 0.0f));
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    auto f = io::read_particles_ply(frames[k]);
+    if (!f) return f.error();
+    std::vector<Vec3f> x = std::move(f->positions);
+    if (x.size() > n)
+      return input_error(fmt::format("{}: {} particles, more than the last frame's {}: particles were removed, a point "
+                                     "cache cannot follow",
+                                     frames[k].string(), x.size(), n));
+    for (std::size_t i = x.size(); i < n; ++i) x.push_back(last.positions[i]);
+    if (k == 0) {
+      io::ParticleFrameView v;
+      v.positions = x;
+      v.comment = "fluidform particles: frame-0 point mesh for particles.pc2 (Blender: Mesh Cache modifier, PC2)";
+      FF_CHECK(io::write_particles_ply(out / "particles_frame0.ply", v));
+    }
+    FF_CHECK(pc2.add(x));
+  }
+  return pc2.finish();
+}
+
+}  // namespace
+
+Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::path& out, const MeshOptions& o,
+                                  core::Progress& progress) {
+  FF_CHECK(o.validate());
+  if (frames.empty()) return input_error("mesh: no particle frames");
+  core::Stopwatch watch;
+  MeshSummary sum;
+  sum.frames_read = frames.size();
+  FF_CHECK(io::ensure_writable_dir(out));
+  FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+
+  const std::vector<std::size_t> chosen = chosen_frames(frames.size(), o);
+  auto last = io::read_particles_ply(frames.back());
+  if (!last) return last.error();
+  FF_TRY(const float d, frame_spacing(*last, frames.back(), o, sum));
+  sum.spacing = d;
+
+  surface::SurfaceStats last_stats;
+  FF_TRY(const std::vector<io::TriangleMesh> meshes, reconstruct_frames(frames, chosen, out, d, o, last_stats, progress));
   sum.frames_meshed = chosen.size();
 
   const io::TriangleMesh& fin = meshes.back();
   const auto check = surface::check_mesh(fin);
   sum.final_triangles = fin.triangles.size();
   sum.final_vertices = fin.vertices.size();
-  sum.mc_triangles_final = stats.back().mc_triangles;
+  sum.mc_triangles_final = last_stats.mc_triangles;
   sum.final_ok = check.ok();
   sum.final_genus = check.genus;
   sum.final_components = check.components;
@@ -178,33 +225,7 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     }
     FF_CHECK(io::write_glb(out / "animation.glb", meshes, g));
   }
-
-  if (o.pc2 && !o.final_only) {
-    // Every particle frame, in order. Particles are written sorted by id, so entry i is the same particle in
-    // every frame; a frame with fewer particles (an emitter still filling) is padded with the last frame's
-    // positions of the missing ones.
-    const std::size_t n = last->positions.size();
-    io::Pc2Writer pc2;
-    FF_CHECK(pc2.open(out / "particles.pc2", n, 0.0f));
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-      auto f = io::read_particles_ply(frames[k]);
-      if (!f) return f.error();
-      std::vector<Vec3f> x = std::move(f->positions);
-      if (x.size() > n)
-        return input_error(fmt::format("{}: {} particles, more than the last frame's {}: particles were removed, a point "
-                                       "cache cannot follow",
-                                       frames[k].string(), x.size(), n));
-      for (std::size_t i = x.size(); i < n; ++i) x.push_back(last->positions[i]);
-      if (k == 0) {
-        io::ParticleFrameView v;
-        v.positions = x;
-        v.comment = "fluidform particles: frame-0 point mesh for particles.pc2 (Blender: Mesh Cache modifier, PC2)";
-        FF_CHECK(io::write_particles_ply(out / "particles_frame0.ply", v));
-      }
-      FF_CHECK(pc2.add(x));
-    }
-    FF_CHECK(pc2.finish());
-  }
+  if (o.pc2 && !o.final_only) FF_CHECK(write_point_cache(frames, *last, out));
   sum.seconds = watch.seconds();
   return sum;
 }

@@ -43,6 +43,45 @@ struct alignas(16) Coverer {
 
 constexpr std::size_t kStackNeighbors = 64;
 
+// The points of the Fibonacci set no neighbour covers: their count and the sum of their unit vectors (in the
+// rotated frame).
+struct FreePoints {
+  int count = 0;
+  Vec3f sum = Vec3f::Zero();
+};
+
+// Eight points at a time: a point stays free while no neighbour covers it (branch-free over the neighbours).
+FreePoints free_points(const Coverer* cov, std::size_t count, const float* px, const float* py, const float* pz,
+                       int samples, std::size_t groups) {
+  using namespace core::simd;
+  const __m128 zero = _mm_setzero_ps();
+  __m128 fx = zero, fy = zero, fz = zero;
+  int free_count = 0;
+  const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  for (std::size_t g = 0; g < groups; g += 2) {
+    const std::size_t k0 = 4 * g, k1 = k0 + 4;
+    const __m128 ax = _mm_loadu_ps(px + k0), ay = _mm_loadu_ps(py + k0), az = _mm_loadu_ps(pz + k0);
+    const __m128 bx = _mm_loadu_ps(px + k1), by = _mm_loadu_ps(py + k1), bz = _mm_loadu_ps(pz + k1);
+    // Padding points (k ≥ N) start covered.
+    const auto left = static_cast<std::size_t>(samples);
+    __m128 ca = _mm_andnot_ps(first_lanes(left > k0 ? left - k0 : 0), all);
+    __m128 cb = _mm_andnot_ps(first_lanes(left > k1 ? left - k1 : 0), all);
+    // Every neighbour, no early exit: a data-dependent branch per neighbour costs more than it saves.
+    for (std::size_t k = 0; k < count; ++k) {
+      const Coverer& c = cov[k];
+      const __m128 da = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, c.x), _mm_mul_ps(ay, c.y)), _mm_mul_ps(az, c.z));
+      const __m128 db = _mm_add_ps(_mm_add_ps(_mm_mul_ps(bx, c.x), _mm_mul_ps(by, c.y)), _mm_mul_ps(bz, c.z));
+      ca = _mm_or_ps(ca, _mm_cmpge_ps(da, c.c));
+      cb = _mm_or_ps(cb, _mm_cmpge_ps(db, c.c));
+    }
+    free_count += 8 - std::popcount(static_cast<unsigned>(_mm_movemask_ps(ca) | (_mm_movemask_ps(cb) << 4)));
+    fx = _mm_add_ps(fx, _mm_add_ps(_mm_andnot_ps(ca, ax), _mm_andnot_ps(cb, bx)));
+    fy = _mm_add_ps(fy, _mm_add_ps(_mm_andnot_ps(ca, ay), _mm_andnot_ps(cb, by)));
+    fz = _mm_add_ps(fz, _mm_add_ps(_mm_andnot_ps(ca, az), _mm_andnot_ps(cb, bz)));
+  }
+  return {free_count, Vec3f(hsum(fx), hsum(fy), hsum(fz))};
+}
+
 }  // namespace
 
 std::uint64_t surface_tension_step_key(double time) { return mix64(std::bit_cast<std::uint64_t>(time)); }
@@ -108,7 +147,6 @@ void SurfaceTension::add_accelerations(std::span<const Vec3f> x, std::span<const
                                        const core::NeighborList& neighbors, std::span<const std::uint8_t> candidates,
                                        const SurfaceTensionParams& params, float dt, std::uint64_t step_key,
                                        std::span<Vec3f> a) {
-  using namespace core::simd;
   const std::size_t n = x.size();
   class_.resize(n);
   normal_.resize(n);
@@ -125,6 +163,16 @@ void SurfaceTension::add_accelerations(std::span<const Vec3f> x, std::span<const
   }
   const int samples = surface_tension_samples(params.samples_per_second, dt);
   prepare_points(samples);
+  estimate_surface(x, id, neighbors, candidates, params, step_key);   // step 2
+  smooth_and_accelerate(x, neighbors, params, a);                     // step 3
+}
+
+void SurfaceTension::estimate_surface(std::span<const Vec3f> x, std::span<const Index> id,
+                                      const core::NeighborList& neighbors, std::span<const std::uint8_t> candidates,
+                                      const SurfaceTensionParams& params, std::uint64_t step_key) {
+  using namespace core::simd;
+  const std::size_t n = x.size();
+  const int samples = points_;
   const std::size_t groups = px_.size() / 4;  // groups of four points, an even number
 
   const float h = params.support, inv_h = 1.0f / h, ratio = params.r2_ratio;
@@ -142,7 +190,6 @@ void SurfaceTension::add_accelerations(std::span<const Vec3f> x, std::span<const
   Vec3f* nrm = normal_.data();
   float* crv = curv_.data();
 
-  // Pass 1: the Monte Carlo for the surface candidates.
   core::parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
     const auto i = static_cast<Index>(ii);
     cls[i] = static_cast<std::uint8_t>(SurfaceClass::Interior);
@@ -152,7 +199,6 @@ void SurfaceTension::add_accelerations(std::span<const Vec3f> x, std::span<const
     const core::NeighborRange nb = neighbors.of(i);
     const std::size_t count = nb.size();
     const Vec3f xi = xs[i];
-    const __m128 zero = _mm_setzero_ps();
 
     // The neighbours in the frame of the rotated point set, scaled to the unit sphere.
     const Eigen::Matrix3f rot = random_rotation(id[i], step_key);
@@ -168,51 +214,34 @@ void SurfaceTension::add_accelerations(std::span<const Vec3f> x, std::span<const
       const Vec3f q = rot.transpose() * r;
       cov[k] = {broadcast(q.x()), broadcast(q.y()), broadcast(q.z()), broadcast(0.5f * r.squaredNorm() + half_gap)};
     }
-
-    // Eight points at a time: a point stays free while no neighbour covers it (branch-free over the neighbours).
-    __m128 fx = zero, fy = zero, fz = zero;
-    int free_points = 0;
-    const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
-    for (std::size_t g = 0; g < groups; g += 2) {
-      const std::size_t k0 = 4 * g, k1 = k0 + 4;
-      const __m128 ax = _mm_loadu_ps(px + k0), ay = _mm_loadu_ps(py + k0), az = _mm_loadu_ps(pz + k0);
-      const __m128 bx = _mm_loadu_ps(px + k1), by = _mm_loadu_ps(py + k1), bz = _mm_loadu_ps(pz + k1);
-      // Padding points (k ≥ N) start covered.
-      const auto left = static_cast<std::size_t>(samples);
-      __m128 ca = _mm_andnot_ps(core::simd::first_lanes(left > k0 ? left - k0 : 0), all);
-      __m128 cb = _mm_andnot_ps(core::simd::first_lanes(left > k1 ? left - k1 : 0), all);
-      // Every neighbour, no early exit: a data-dependent branch per neighbour costs more than it saves.
-      for (std::size_t k = 0; k < count; ++k) {
-        const Coverer& c = cov[k];
-        const __m128 da = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, c.x), _mm_mul_ps(ay, c.y)), _mm_mul_ps(az, c.z));
-        const __m128 db = _mm_add_ps(_mm_add_ps(_mm_mul_ps(bx, c.x), _mm_mul_ps(by, c.y)), _mm_mul_ps(bz, c.z));
-        ca = _mm_or_ps(ca, _mm_cmpge_ps(da, c.c));
-        cb = _mm_or_ps(cb, _mm_cmpge_ps(db, c.c));
-      }
-      free_points += 8 - std::popcount(static_cast<unsigned>(_mm_movemask_ps(ca) | (_mm_movemask_ps(cb) << 4)));
-      fx = _mm_add_ps(fx, _mm_add_ps(_mm_andnot_ps(ca, ax), _mm_andnot_ps(cb, bx)));
-      fy = _mm_add_ps(fy, _mm_add_ps(_mm_andnot_ps(ca, ay), _mm_andnot_ps(cb, by)));
-      fz = _mm_add_ps(fz, _mm_add_ps(_mm_andnot_ps(ca, az), _mm_andnot_ps(cb, bz)));
-    }
-    const Vec3f dir = rot * Vec3f(hsum(fx), hsum(fy), hsum(fz));
+    const FreePoints free = free_points(cov, count, px, py, pz, samples, groups);
+    const Vec3f dir = rot * free.sum;
     const float len = dir.norm();
     // No free point, or free points without a net direction: a false positive of the classifier.
-    if (free_points == 0 || !(len > 1e-6f)) {
+    if (free.count == 0 || !(len > 1e-6f)) {
       cls[i] = static_cast<std::uint8_t>(SurfaceClass::Covered);
       return;
     }
     cls[i] = static_cast<std::uint8_t>(SurfaceClass::Surface);
     nrm[i] = dir / len;
-    const double f = free_points * inv_samples;
+    const double f = free.count * inv_samples;
     crv[i] = static_cast<float>(kappa_scale * std::cos(std::acos(1.0 - 2.0 * f) + kappa_shift));
   });
+}
 
-  // Pass 2: blend with the surface neighbours (weights 1 − r/h) and add the acceleration.
+void SurfaceTension::smooth_and_accelerate(std::span<const Vec3f> x, const core::NeighborList& neighbors,
+                                           const SurfaceTensionParams& params, std::span<Vec3f> a) {
+  // Blend with the surface neighbours (weights 1 − r/h) and add the acceleration.
+  const float inv_h = 1.0f / params.support;
   const float tau = params.tau, c_acc = -params.sigma / params.mass;
+  const Vec3f* xs = x.data();
+  const std::uint8_t* cls = class_.data();
+  const Vec3f* nrm = normal_.data();
+  const float* crv = curv_.data();
   Vec3f* out = a.data();
   Vec3f* fn = final_normal_.data();
   float* fc = final_curv_.data();
-  core::parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
+  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
     const auto i = static_cast<Index>(ii);
     fn[i] = Vec3f::Zero();
     fc[i] = 0.0f;

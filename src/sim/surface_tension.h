@@ -103,6 +103,13 @@ class SurfaceTension {
 
  private:
   void prepare_points(int n);
+  /// Step 2: the Monte Carlo normal and curvature of every candidate (class_, normal_, curv_).
+  void estimate_surface(std::span<const Vec3f> x, std::span<const Index> id, const core::NeighborList& neighbors,
+                        std::span<const std::uint8_t> candidates, const SurfaceTensionParams& params,
+                        std::uint64_t step_key);
+  /// Step 3: smoothed over surface neighbours (final_normal_, final_curv_) and added to `a`.
+  void smooth_and_accelerate(std::span<const Vec3f> x, const core::NeighborList& neighbors,
+                             const SurfaceTensionParams& params, std::span<Vec3f> a);
 
   int points_ = 0;  // size of the point set below
   std::vector<float> px_, py_, pz_;  // spherical Fibonacci set, unit radius, padded to a multiple of 8

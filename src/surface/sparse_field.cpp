@@ -104,10 +104,9 @@ struct Binned {
   std::vector<float> ox, oy, oz;         // in [0, 8) cells
 };
 
-}  // namespace
 
-Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params) {
-  SparseField field;
+/// The grid's frame: cell, iso, origin and block counts of a grid that holds every node within h of a particle.
+Status frame_grid(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params, SparseField& field) {
   const double d = spacing;
   field.cell = params.cell_size * d;
   field.iso = params.iso;
@@ -133,8 +132,12 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
   }
   if (!(node_count < 9.0e18L))
     return param_error("surface: the particle cloud needs more grid nodes than a 64-bit id can number");
+  return {};
+}
 
-  // --- bin the particles by home block (sort by key, then index: one global order for every block) --------------
+/// The particles binned by home block: sorted by key, then index (one global order for every block).
+Binned bin_particles(std::span<const Vec3f> particles, const SparseField& field) {
+  const double block_edge = kB * field.cell;
   const auto n = std::int64_t(particles.size());
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order(static_cast<std::size_t>(n));
   core::parallel_for(n, [&](std::int64_t i) {
@@ -166,9 +169,11 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
     bins.oy[std::size_t(i)] = float((double(p.y()) - field.origin.y()) / field.cell - double(kB * b[1]));
     bins.oz[std::size_t(i)] = float((double(p.z()) - field.origin.z()) / field.cell - double(kB * b[2]));
   });
-  std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(order);
+  return bins;
+}
 
-  // --- candidate blocks: every block within one block of a home block (h ≤ 8 cells) --------------------------------
+/// Every block within one block of a home block (h ≤ 8 cells), ascending and unique.
+std::vector<std::uint64_t> candidate_blocks(const Binned& bins, const SparseField& field) {
   std::vector<std::uint64_t> candidates;
   candidates.reserve(bins.bin_key.size() * 8);
   for (const std::uint64_t key : bins.bin_key) {
@@ -176,18 +181,87 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
   }
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  return candidates;
+}
+
+/// The kernel in cell units: (h² − r²)³ summed into a block's nodes, scaled by `weight` once per node at the end.
+struct Splat {
+  float hc;      // support in cells
+  float h2;      // hc²
+  float reach;   // hc + kSlack: how far outside a block a particle can still touch a node
+};
+
+/// Adds one particle's unscaled kernel to the nodes of block `v`. (px, py, pz) is its offset inside its home
+/// block and (sx, sy, sz) = 8 · (home − this block) in cells.
+void splat_particle(const Splat& k, float px, float py, float pz, int sx, int sy, int sz,
+                    std::array<float, SparseField::kNodesPerBlock>& v) {
+  const float hc = k.hc, h2 = k.h2, reach = k.reach;
+  const float ox = px + float(sx), oy = py + float(sy), oz = pz + float(sz);
+  // Most particles of the 26 neighbouring bins cannot reach this block: reject them with compares.
+  if (ox < -reach || ox > float(kB) + reach || oy < -reach || oy > float(kB) + reach || oz < -reach ||
+      oz > float(kB) + reach)
+    return;
+  // Node ranges of the support (a ball, sliced into z planes and y rows). They are widened by kSlack
+  // against rounding, so that every node with a positive contribution is visited by every block that
+  // has it; a node visited outside the support adds exactly +0, so the ranges need not agree.
+  const int x0 = std::max(0, int(std::ceil(ox - hc - kSlack)));
+  const int x1 = std::min(kB, int(std::floor(ox + hc + kSlack)));
+  const int y0 = std::max(0, int(std::ceil(oy - hc - kSlack)));
+  const int y1 = std::min(kB, int(std::floor(oy + hc + kSlack)));
+  const int z0 = std::max(0, int(std::ceil(oz - hc - kSlack)));
+  const int z1 = std::min(kB, int(std::floor(oz + hc + kSlack)));
+  if (x0 > x1 || y0 > y1 || z0 > z1) return;  // the support misses this block
+  // Offsets from the particle as float(l − 8d) − o: the same floats in every block (see above).
+  // Squared x offsets of the whole row: nodes out of reach get a large value and so add +0 below.
+  float fx2[kN];
+  for (int lx = 0; lx < kN; ++lx) {
+    const float fx = float(lx - sx) - px;
+    fx2[lx] = fx * fx;
+  }
+  for (int lz = z0; lz <= z1; ++lz) {
+    const float fz = float(lz - sz) - pz;
+    const float fz2 = fz * fz;
+    if (fz2 >= h2) continue;
+    const float ry = std::sqrt(h2 - fz2) + kSlack;
+    const int ya = std::max(y0, int(std::ceil(oy - ry))), yb = std::min(y1, int(std::floor(oy + ry)));
+    for (int ly = ya; ly <= yb; ++ly) {
+      const float fy = float(ly - sy) - py;
+      const float rem = h2 - (fz2 + fy * fy);  // h² − (dy² + dz²)
+      if (rem <= 0.0f) continue;
+      float* row = &v[std::size_t(SparseField::local(0, ly, lz))];
+      // (h² − r²)³ where positive over the whole 9-node row: branch-free and vectorised, which beats
+      // clipping the row to the ball; the weight is applied once per node by the caller.
+      for (int lx = 0; lx < kN; ++lx) {
+        const float q = rem - fx2[lx];
+        const float qp = q > 0.0f ? q : 0.0f;
+        row[lx] += qp * qp * qp;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params) {
+  SparseField field;
+  FF_CHECK(frame_grid(particles, spacing, params, field));
+  const Binned bins = bin_particles(particles, field);
+  const std::vector<std::uint64_t> candidates = candidate_blocks(bins, field);
   field.candidate_blocks = candidates.size();
   if (candidates.size() > params.max_blocks)
     return param_error(
         fmt::format("surface: {} grid blocks needed, more than max_blocks = {}", candidates.size(), params.max_blocks));
 
-  // --- evaluate each candidate block; keep it when the surface passes through it ----------------------------------
-  const float hc = float(h / field.cell);  // support in cells
-  const float h2 = hc * hc;
-  // φ in cell units: V_p W(r) = pv (d/cell)³ · 315/(64π hc⁹) (hc² − r²)³ with r in cells.
+  // Evaluate each candidate block; keep it when the surface passes through it.
+  const double d = spacing;
+  const double h = params.kernel_radius * d;
+  Splat splat;
+  splat.hc = float(h / field.cell);
+  splat.h2 = splat.hc * splat.hc;
+  splat.reach = splat.hc + kSlack;
+  // φ in cell units: V_p W(r) = pv (d/cell)³ · 315/(64π hc⁹) (hc² − r²)³ with r in cells (Müller et al. 2003's poly6).
   const float kw = float(params.particle_volume * std::pow(d / field.cell, 3.0) * 315.0 /
-                         (64.0 * std::numbers::pi * std::pow(double(hc), 9.0)));
-  const float reach = hc + kSlack;
+                         (64.0 * std::numbers::pi * std::pow(double(splat.hc), 9.0)));
   const float iso = params.iso;
   const auto nc = std::int64_t(candidates.size());
   std::vector<std::vector<float>> kept(candidates.size());
@@ -197,57 +271,13 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
     const auto b = field.block_coords(candidates[std::size_t(c)]);
     // Neighbours in increasing key order (z, then y, then x): the one global particle order.
     field.for_each_block_around(b, [&](std::uint64_t key, int dx, int dy, int dz) {
-          const auto it = std::lower_bound(bins.bin_key.begin(), bins.bin_key.end(), key);
-          if (it == bins.bin_key.end() || *it != key) return;
-          const auto bin = std::size_t(it - bins.bin_key.begin());
-          // Node l of this block is node (l − 8·d) of the home block.
-          const int sx = kB * dx, sy = kB * dy, sz = kB * dz;
-          for (std::uint32_t i = bins.bin_start[bin]; i < bins.bin_start[bin + 1]; ++i) {
-            const float ox = bins.ox[i] + float(sx), oy = bins.oy[i] + float(sy), oz = bins.oz[i] + float(sz);
-            // Most particles of the 26 neighbouring bins cannot reach this block: reject them with compares.
-            if (ox < -reach || ox > float(kB) + reach || oy < -reach || oy > float(kB) + reach || oz < -reach ||
-                oz > float(kB) + reach)
-              continue;
-            // Node ranges of the support (a ball, sliced into z planes and y rows). They are widened by kSlack
-            // against rounding, so that every node with a positive contribution is visited by every block that
-            // has it; a node visited outside the support adds exactly +0, so the ranges need not agree.
-            const int x0 = std::max(0, int(std::ceil(ox - hc - kSlack)));
-            const int x1 = std::min(kB, int(std::floor(ox + hc + kSlack)));
-            const int y0 = std::max(0, int(std::ceil(oy - hc - kSlack)));
-            const int y1 = std::min(kB, int(std::floor(oy + hc + kSlack)));
-            const int z0 = std::max(0, int(std::ceil(oz - hc - kSlack)));
-            const int z1 = std::min(kB, int(std::floor(oz + hc + kSlack)));
-            if (x0 > x1 || y0 > y1 || z0 > z1) continue;  // the support misses this block
-            // Offsets from the particle as float(l − 8d) − o: the same floats in every block (see above).
-            const float px = bins.ox[i], py = bins.oy[i], pz = bins.oz[i];
-            // Squared x offsets of the whole row: nodes out of reach get a large value and so add +0 below.
-            float fx2[kN];
-            for (int lx = 0; lx < kN; ++lx) {
-              const float fx = float(lx - sx) - px;
-              fx2[lx] = fx * fx;
-            }
-            for (int lz = z0; lz <= z1; ++lz) {
-              const float fz = float(lz - sz) - pz;
-              const float fz2 = fz * fz;
-              if (fz2 >= h2) continue;
-              const float ry = std::sqrt(h2 - fz2) + kSlack;
-              const int ya = std::max(y0, int(std::ceil(oy - ry))), yb = std::min(y1, int(std::floor(oy + ry)));
-              for (int ly = ya; ly <= yb; ++ly) {
-                const float fy = float(ly - sy) - py;
-                const float rem = h2 - (fz2 + fy * fy);  // h² − (dy² + dz²)
-                if (rem <= 0.0f) continue;
-                float* row = &v[std::size_t(SparseField::local(0, ly, lz))];
-                // (h² − r²)³ where positive over the whole 9-node row: branch-free and vectorised, which beats
-                // clipping the row to the ball; kw is applied once per node below.
-                for (int lx = 0; lx < kN; ++lx) {
-                  const float q = rem - fx2[lx];
-                  const float qp = q > 0.0f ? q : 0.0f;
-                  row[lx] += qp * qp * qp;
-                }
-              }
-            }
-          }
-        });
+      const auto it = std::lower_bound(bins.bin_key.begin(), bins.bin_key.end(), key);
+      if (it == bins.bin_key.end() || *it != key) return;
+      const auto bin = std::size_t(it - bins.bin_key.begin());
+      // Node l of this block is node (l − 8·d) of the home block.
+      for (std::uint32_t i = bins.bin_start[bin]; i < bins.bin_start[bin + 1]; ++i)
+        splat_particle(splat, bins.ox[i], bins.oy[i], bins.oz[i], kB * dx, kB * dy, kB * dz, v);
+    });
     for (float& x : v) x *= kw;
     bool any_in = false, any_out = false;
     float mx = 0.0f;
