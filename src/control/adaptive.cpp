@@ -86,8 +86,8 @@ void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) {
 template <class F>
 void AdaptiveController::for_each_bond(std::size_t i, F&& f) const {
   const core::NeighborRange r = cf_.of(i);
-  const std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
-  for (Index g = 0, groups = grp_base_[i + 1] - grp_base_[i]; g < groups; ++g)
+  const std::uint8_t* mask = bond_mask_.data() + mask_group_start_[i];
+  for (Index g = 0, groups = mask_group_start_[i + 1] - mask_group_start_[i]; g < groups; ++g)
     for (unsigned bits = mask[g]; bits; bits &= bits - 1) f(r[4 * g + static_cast<std::size_t>(__builtin_ctz(bits))]);
 }
 
@@ -105,9 +105,9 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   fluid_grid_.query(p.position, samples_.position, hc_, cf_);
   nearest_.resize(n);
   fill_.resize(m);
-  hstar2_.resize(m);
-  xcw_.resize(m + 1);
-  xcw_[m] = {kSentinelCoord, kSentinelCoord, kSentinelCoord, 0.0f};
+  bond_radius2_.resize(m);
+  sample_xw_.resize(m + 1);
+  sample_xw_[m] = {kSentinelCoord, kSentinelCoord, kSentinelCoord, 0.0f};
   lambda_.assign(m, 0.0f);
 
   // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
@@ -116,16 +116,16 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   const bool multi = samples_.mass.size() > 1;
   const __m128 h2 = broadcast(poly6_.h2), hc2v = broadcast(hc2), zero = _mm_setzero_ps();
   // Groups of four pairs per sample: where each sample's bond masks start.
-  grp_base_.resize(m + 1);
-  grp_base_[0] = 0;
-  for (std::size_t i = 0; i < m; ++i) grp_base_[i + 1] = grp_base_[i] + static_cast<Index>((cf_.of(i).size() + 3) / 4);
-  bond_mask_.resize(grp_base_[m]);
+  mask_group_start_.resize(m + 1);
+  mask_group_start_[0] = 0;
+  for (std::size_t i = 0; i < m; ++i) mask_group_start_[i + 1] = mask_group_start_[i] + static_cast<Index>((cf_.of(i).size() + 3) / 4);
+  bond_mask_.resize(mask_group_start_[m]);
   const auto fill_sample = [&](std::size_t i) {
     float rho = 0.0f;
     const std::uint8_t t = samples_.target[i];
-    std::uint8_t* mask = bond_mask_.data() + grp_base_[i];
+    std::uint8_t* mask = bond_mask_.data() + mask_group_start_[i];
     if (!active(t, time_)) {
-      std::fill(mask, mask + (grp_base_[i + 1] - grp_base_[i]), std::uint8_t(0));
+      std::fill(mask, mask + (mask_group_start_[i + 1] - mask_group_start_[i]), std::uint8_t(0));
     } else {
       const Vec3f xi = samples_.position[i];
       const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
@@ -146,13 +146,13 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     }
     const float f = mp * rho / samples_.rho_c[i];
     fill_[i] = f;
-    xcw_[i] = {samples_.position[i].x(), samples_.position[i].y(), samples_.position[i].z(), f};
+    sample_xw_[i] = {samples_.position[i].x(), samples_.position[i].y(), samples_.position[i].z(), f};
     float scale = 1.0f;
     if (params_.bond_breaking) {
       scale = params_.bond_radius == BondRadius::Paper ? 1.0f / (1.0f + f) : std::min(1.0f, 2.0f / (1.0f + f));
     }
     const float hs2 = hc2 * scale * scale;
-    hstar2_[i] = hs2;
+    bond_radius2_[i] = hs2;
     // Bond masks, one bit per pair: r ≤ H_c*,i (and the same target). The pairs are still in L1 from the sum.
     if (!active(t, time_) || hs2 == hc2) return;
     const Vec3f xi = samples_.position[i];
@@ -237,7 +237,7 @@ void AdaptiveController::build_bonds(sim::ParticleSet& p) {
       // The padding is far away: it never beats a real bond, and every list has one.
       const Index* g = bond_idx_.data() + k;
       const Index i0 = g[0], i1 = g[1], i2 = g[2], i3 = g[3];
-      const P4 xc = gather_packed(xcw_.data(), g);
+      const P4 xc = gather_packed(sample_xw_.data(), g);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
       // Bonds ascend, so a strict < keeps the lower index of a tie within a lane.
@@ -354,7 +354,7 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
     // Four bonds at a time: Σ w f r and Σ w with w the Poly6 weight (its constant cancels in the ratio).
     for (Index k = b; k < e; k += 4) {
       // w of the packed samples is their fill ratio here (written by begin_step); the padding is out of reach.
-      const P4 xc = gather_packed(xcw_.data(), bond_idx_.data() + k);
+      const P4 xc = gather_packed(sample_xw_.data(), bond_idx_.data() + k);
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
       const __m128 r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz));
       const __m128 q2 = _mm_sub_ps(h2, r2);
@@ -379,35 +379,44 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
 // Eq. 6–10 (METHOD §a.3): per sample λ_i = −C_i/(Σ_j |g_ij|² + ε_c) with C_i = min(ρ_p,i/ρ_c,i − 1, 0) at x*,
 // g_ij = −(m_p/ρ_c,i) ∇W(x_ci − x*_j); per fluid particle Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij, at most clamp·d.
 void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
+  if (p.size() == 0) return;
+  sample_lambdas(p);
+  if (std::getenv("FF_DEBUG_ACTIVE")) print_active_set();
+  if (active_.empty()) return;  // every sample is full: no correction anywhere
+  const CorrectionLimit limit{params_.alpha, params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt), params_.kinematic};
+  // Once a target has formed only a few (surface) samples are still under-filled: then the sum is scattered from
+  // those samples, instead of every fluid particle walking its ~270 bonds to find them.
+  if (active_.size() * 8 < samples_.position.size()) scatter_correction(p, limit);
+  else gather_correction(p, limit);
+}
+
+// λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked),
+// and the sample's coefficient φ̃ λ m_p/ρ_c kg of the Δx pass (0 when full) into its packed w; active_ lists the
+// samples with λ > 0.
+void AdaptiveController::sample_lambdas(sim::ParticleSet& p) {
   using namespace core::simd;
-  const std::size_t n = p.size(), m = samples_.position.size();
-  if (n == 0) return;
-  Vec3f* xs = p.predicted.data();
+  const std::size_t m = samples_.position.size();
+  const Vec3f* xs = p.predicted.data();
   const std::uint8_t* tf = p.target.data();
   const float mp = ctx_.particle_mass, eps = eps_c_;
   const bool multi = samples_.mass.size() > 1;
   const __m128 h = broadcast(spiky_.h), h2 = broadcast(poly6_.h2), zero = _mm_setzero_ps();
   const float kg = -spiky_.kgrad;  // > 0: −∇W(r) = kg (h − |r|)² r̂ points along r = x_c − x_p (attraction)
-  // λ per sample, four fluid neighbours at a time (core/pair_loop.h; padding lanes point at particle 0, masked),
-  // and the sample's coefficient φ̃ λ m_p/ρ_c kg of the Δx gather (0 when full) into its packed w.
   parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     lambda_[i] = 0.0f;
-    xcw_[i].w = 0.0f;
+    sample_xw_[i].w = 0.0f;
     const std::uint8_t t = samples_.target[i];
     if (!active(t, time_)) return;
     const Vec3f xi = samples_.position[i];
     const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
     const auto range = cf_.of(i);
-    auto r2_of = [&](const Index* j) {
-      return dist2(xs, j, px, py, pz);
-    };
     // Density and gradient sums in one pass over the pairs: once the fluid has arrived nearly every sample is
     // slightly under-filled (the control holds the fluid against the PBF pressure), so the gradient sum is needed
     // almost everywhere and a second pass would decode and gather every pair again.
     __m128 sw = zero, g2 = zero;
     core::for_neighbors4(range, 0, [&](const Index* j, __m128 lanes) {
-      const __m128 r2 = r2_of(j);
+      const __m128 r2 = dist2(xs, j, px, py, pz);
       __m128 use = _mm_and_ps(lanes, _mm_cmplt_ps(r2, h2));
       if (multi) use = _mm_and_ps(use, same_target(tf, j, t));
       const __m128 q2 = _mm_sub_ps(h2, r2);
@@ -420,68 +429,72 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     if (c >= 0.0f) return;
     const float k = mp / samples_.rho_c[i] * spiky_.kgrad;
     lambda_[i] = -c / (k * k * hsum(g2) + eps);
-    xcw_[i].w = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg;
+    sample_xw_[i].w = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg;
   });
   active_.clear();
   for (std::size_t i = 0; i < m; ++i)
     if (lambda_[i] > 0.0f) active_.push_back(static_cast<Index>(i));
-  // FF_DEBUG_ACTIVE=1: the active set of every iteration on stderr (bench/RESULTS.md, "Where the formed frame's time
-  // goes"): how many samples have λ > 0, how many were under-filled at the start of the sub-step, and how many
-  // started clearly over-full (ρ_p/ρ_c ≥ 1.05), the ones an active-set rule with a 5 % margin could skip.
-  if (std::getenv("FF_DEBUG_ACTIVE")) {
-    std::size_t under = 0, over = 0, over_active = 0;
-    for (std::size_t i = 0; i < m; ++i) {
-      under += fill_[i] < 1.0f;
-      over += fill_[i] >= 1.05f;
-      over_active += fill_[i] >= 1.05f && lambda_[i] > 0.0f;
-    }
-    fmt::print(stderr, "adaptive t={:.4f}: {} samples, λ > 0: {}, under-filled at start: {}, over-full ≥ 1.05: {} ({} with λ > 0)\n",
-               time_, m, active_.size(), under, over, over_active);
-  }
-  if (active_.empty()) return;  // every sample is full: no correction anywhere
+}
 
-  const float alpha = params_.alpha, max_dx = params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt),
-              max_dx2 = max_dx * max_dx;
-  Vec3f* shift = p.shift.data();
-  const bool kinematic = params_.kinematic;
-  auto apply = [&](std::size_t j, Vec3f dx) {
-    dx *= alpha;
-    const float d2 = dx.squaredNorm();
-    if (d2 > max_dx2) dx *= max_dx / std::sqrt(d2);
-    xs[j] += dx;
-    if (kinematic) shift[j] += dx;
-  };
-  // Δx_j = α Σ_{i∈B(j)} φ̃_i λ_i g_ij. Once a target has formed only a few (surface) samples are still under-filled:
-  // then the sum is scattered from those samples (serially, in sample order: deterministic), instead of
-  // every fluid particle walking its ~270 bonds to find them.
-  if (active_.size() * 8 < m) {
-    dx_.assign(n, Vec3f::Zero());
-    touched_.assign(n, 0);
-    const Vec3f* x = p.position.data();  // bonds were decided at the start of the sub-step
-    for (Index i : active_) {
-      const std::uint8_t t = samples_.target[i];
-      const Vec3f xi = samples_.position[i];
-      const float coef = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = hstar2_[i];
-      for (Index j : cf_.of(i)) {
-        if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
-        const Vec3f r = xi - xs[j];
-        const float r2 = r.squaredNorm();
-        if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
-        const float len = std::sqrt(r2), q = spiky_.h - len;
-        dx_[j] += (coef * q * q / len) * r;
-        touched_[j] = 1;
-      }
-    }
-    parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
-      const auto j = static_cast<std::size_t>(jj);
-      if (touched_[j]) apply(j, dx_[j]);
-    });
-    return;
+// FF_DEBUG_ACTIVE=1: the active set of every iteration on stderr (bench/RESULTS.md, "Where the formed frame's time
+// goes"): how many samples have λ > 0, how many were under-filled at the start of the sub-step, and how many
+// started clearly over-full (ρ_p/ρ_c ≥ 1.05), the ones an active-set rule with a 5 % margin could skip.
+void AdaptiveController::print_active_set() const {
+  const std::size_t m = samples_.position.size();
+  std::size_t under = 0, over = 0, over_active = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    under += fill_[i] < 1.0f;
+    over += fill_[i] >= 1.05f;
+    over_active += fill_[i] >= 1.05f && lambda_[i] > 0.0f;
   }
-  // Gather over the bonds, four at a time, with the per-sample factor φ̃ λ m_p/ρ_c kg precomputed (0 when full;
-  // also 0 at the padding, which is out of reach too).
-  const __m128 sh = broadcast(spiky_.h), sh2 = broadcast(spiky_.h2);
+  fmt::print(stderr, "adaptive t={:.4f}: {} samples, λ > 0: {}, under-filled at start: {}, over-full ≥ 1.05: {} ({} with λ > 0)\n",
+             time_, m, active_.size(), under, over, over_active);
+}
+
+void AdaptiveController::CorrectionLimit::apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const {
+  dx *= alpha;
+  const float d2 = dx.squaredNorm();
+  if (d2 > max_dx * max_dx) dx *= max_dx / std::sqrt(d2);
+  p.predicted[j] += dx;
+  if (kinematic) p.shift[j] += dx;
+}
+
+// Δx_j scattered from the few active samples (serially, in sample order: deterministic).
+void AdaptiveController::scatter_correction(sim::ParticleSet& p, const CorrectionLimit& limit) {
+  const std::size_t n = p.size();
+  const Vec3f* xs = p.predicted.data();
+  const std::uint8_t* tf = p.target.data();
+  const float mp = ctx_.particle_mass, kg = -spiky_.kgrad;
+  dx_.assign(n, Vec3f::Zero());
+  touched_.assign(n, 0);
+  const Vec3f* x = p.position.data();  // bonds were decided at the start of the sub-step
+  for (Index i : active_) {
+    const std::uint8_t t = samples_.target[i];
+    const Vec3f xi = samples_.position[i];
+    const float coef = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = bond_radius2_[i];
+    for (Index j : cf_.of(i)) {
+      if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
+      const Vec3f r = xi - xs[j];
+      const float r2 = r.squaredNorm();
+      if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
+      const float len = std::sqrt(r2), q = spiky_.h - len;
+      dx_[j] += (coef * q * q / len) * r;
+      touched_[j] = 1;
+    }
+  }
   parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
+    const auto j = static_cast<std::size_t>(jj);
+    if (touched_[j]) limit.apply(p, j, dx_[j]);
+  });
+}
+
+// Δx_j gathered over each fluid particle's bonds, four at a time, with the per-sample factor φ̃ λ m_p/ρ_c kg
+// precomputed (0 when full; also 0 at the padding, which is out of reach too).
+void AdaptiveController::gather_correction(sim::ParticleSet& p, const CorrectionLimit& limit) {
+  using namespace core::simd;
+  const Vec3f* xs = p.predicted.data();
+  const __m128 sh = broadcast(spiky_.h), sh2 = broadcast(spiky_.h2), zero = _mm_setzero_ps();
+  parallel_for(static_cast<std::int64_t>(p.size()), [&](std::int64_t jj) {
     const auto j = static_cast<std::size_t>(jj);
     const Index b = bond_off_[j], e = bond_off_[j + 1];
     if (b == e) return;
@@ -489,7 +502,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
     const __m128 px = broadcast(xj.x()), py = broadcast(xj.y()), pz = broadcast(xj.z());
     __m128 dx = zero, dy = zero, dz = zero;
     for (Index k = b; k < e; k += 4) {
-      const P4 xc = gather_packed(xcw_.data(), bond_idx_.data() + k);
+      const P4 xc = gather_packed(sample_xw_.data(), bond_idx_.data() + k);
       const __m128 c4 = xc.w;
       if (_mm_movemask_ps(_mm_cmpgt_ps(c4, zero)) == 0) continue;
       const __m128 rx = _mm_sub_ps(xc.x, px), ry = _mm_sub_ps(xc.y, py), rz = _mm_sub_ps(xc.z, pz);
@@ -503,7 +516,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
       dz = _mm_add_ps(dz, _mm_mul_ps(w, rz));
     }
     const Vec3f d(hsum(dx), hsum(dy), hsum(dz));
-    if (d.squaredNorm() > 0.0f) apply(j, d);
+    if (d.squaredNorm() > 0.0f) limit.apply(p, j, d);
   });
 }
 

@@ -31,7 +31,7 @@
 
 namespace ff::control {
 
-/// A sample's position and one per-pass value, 16-byte aligned for one load (see AdaptiveController::xcw_).
+/// A sample's position and one per-pass value, 16-byte aligned for one load (see AdaptiveController::sample_xw_).
 struct alignas(16) PackedSample {
   float x, y, z, w;
 };
@@ -54,6 +54,16 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   bool active(std::uint8_t t, double time) const { return samples_.started(t, time); }
   void adaptive_spring(sim::ParticleSet& p, float dt) const;
   void control_correction(sim::ParticleSet& p, float dt);
+  // The scale α and the clamp of a control displacement Δx_j (METHOD §a.3), applied to x*_j (and the shift).
+  struct CorrectionLimit {
+    float alpha, max_dx;
+    bool kinematic;
+    void apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const;
+  };
+  void sample_lambdas(sim::ParticleSet& p);
+  void print_active_set() const;
+  void scatter_correction(sim::ParticleSet& p, const CorrectionLimit& limit);
+  void gather_correction(sim::ParticleSet& p, const CorrectionLimit& limit);
   void gather(sim::ParticleSet& p);
   void build_bonds(sim::ParticleSet& p);
   // Calls f(j) for each fluid particle j bonded to sample i (its pairs in cf_, one bit each in bond_mask_).
@@ -72,17 +82,17 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   double time_ = 0.0;
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
-  std::vector<float> fill_, hstar2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; H_c*²; λ
+  std::vector<float> fill_, bond_radius2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; bond radius H_c*²; λ
   // CSR: fluid j → bonded samples (ascending), each list padded to a multiple of four with the sentinel sample
   // m (far away, coefficient 0), so the bond loops load whole groups without tests; empty lists stay empty.
   std::vector<Index> bond_off_, bond_idx_;
   std::vector<Index> bond_end_;             // fluid j → end of its real bonds (before the padding)
   // Per sample (and the sentinel at m): x, y, z and a per-pass value w (the fill ratio for the spring, then the
   // control coefficient φ̃ λ m_p/ρ_c kg in each iteration), so a bond loop fetches a sample in one 16-byte load.
-  std::vector<PackedSample> xcw_;
+  std::vector<PackedSample> sample_xw_;
   std::vector<Index> nearest_;              // fluid j → its nearest bonded sample (kInvalidIndex: none)
   std::vector<Index> cursor_;               // per thread × fluid: bond counts, then write cursors
-  std::vector<Index> grp_base_;             // per sample: first group of four pairs in bond_mask_
+  std::vector<Index> mask_group_start_;             // per sample: first group of four pairs in bond_mask_
   std::vector<std::uint8_t> bond_mask_;     // per group of four sample → fluid pairs: which are bonds
   std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
   std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)

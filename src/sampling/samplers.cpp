@@ -224,6 +224,93 @@ std::vector<Vec3f> random_surface_points(const io::TriangleMesh& mesh, std::size
   return out;
 }
 
+namespace {
+
+/// The n of `cand` that weighted sample elimination keeps, for the r_max of n samples in the target.
+std::vector<Vec3f> eliminate_to(const std::vector<Vec3f>& cand, std::size_t n, double r_max, core::Progress& progress) {
+  EliminationParams ep;
+  ep.d_max = static_cast<float>(2.0 * r_max);
+  const auto keep = eliminate_samples(cand, n, ep, progress);
+  std::vector<Vec3f> x;
+  x.reserve(keep.size());
+  for (Index k : keep) x.push_back(cand[k]);
+  return x;
+}
+
+/// The blue-noise volume set (METHOD §a.1): 2n random interior candidates, weighted sample elimination down to n,
+/// relaxation against the SDF, then a repair that makes the acceptance rules exact.
+Result<std::vector<Vec3f>> blue_noise_samples(const io::TriangleMesh& mesh, const MeshField& field, const SdfGrid& sdf,
+                                              const SamplingParams& params, float d, std::size_t n, SampleReport& rep,
+                                              const core::Stopwatch& watch, core::Progress& progress) {
+  rep.candidates = 2 * n;
+  const auto cand = random_interior_points(sdf, field.bounds(), rep.candidates, params.seed);
+  if (cand.size() < n)
+    return input_error(fmt::format("the target's volume could not be sampled ({} of {} interior points found)",
+                                   cand.size(), n));
+  std::vector<Vec3f> x = eliminate_to(cand, n, volume_r_max(rep.volume, n), progress);
+  RelaxParams rp;
+  rp.spacing = d;
+  rp.steps = params.relax_steps;
+  double t = watch.seconds();
+  rep.t_init = t - rep.t_sdf - rep.t_field;
+  relax_samples(x, sdf, rp, progress);
+  rep.t_relax = watch.seconds() - t;
+  t = watch.seconds();
+  // First the exact inside test (the interpolated grid can disagree by a fraction of a node in thin
+  // walls and near a hole's mouth, where the winding number is close to ½).
+  // The few outside are moved just below their exact closest surface point, or dropped if that fails.
+  std::vector<std::uint8_t> in(x.size());
+  field.inside(x, in);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!in[i]) {
+      const MeshField::Closest c = field.closest(x[i]);
+      const Vec3f moved = c.point - 0.15f * d * c.normal;
+      if (!field.inside(moved)) continue;
+      x[i] = moved;
+    }
+    x[k++] = x[i];
+  }
+  const std::size_t outside = x.size() - k;
+  x.resize(k);
+  // The acceptance rules of a blue-noise set, made exact: nothing closer than 0.85 d, and thin parts
+  // the relaxation emptied get samples back (typically a handful per ten thousand).
+  const auto surface_points = static_cast<std::size_t>(std::min(64.0 * rep.area / (double(d) * d), 16e6));
+  const auto surface = random_surface_points(mesh, surface_points, params.seed ^ 0x5EEDull);
+  rep.repaired_dropped = outside + enforce_spacing(x, sdf, 0.85f * d, surface, &rep.repaired_added);
+  rep.t_repair = watch.seconds() - t;
+  return x;
+}
+
+/// A surface shell: 4n random surface points eliminated down to n (Yuksel 2015's weighted sample elimination).
+std::vector<Vec3f> surface_samples(const io::TriangleMesh& mesh, const SamplingParams& params, std::size_t n,
+                                   SampleReport& rep, core::Progress& progress) {
+  rep.candidates = 4 * n;
+  const auto cand = random_surface_points(mesh, rep.candidates, params.seed);
+  return eliminate_to(cand, n, surface_r_max(rep.area, n), progress);
+}
+
+/// The control set of the sample positions `x`, with their weights (paper eq. 1–4; sampling/weights.h).
+Result<ControlSet> weighted_set(const std::vector<Vec3f>& x, const SdfGrid* sdf, const SamplingParams& params, float d,
+                                std::uint8_t target) {
+  ControlSet set;
+  set.target = target;
+  set.spacing = d;
+  set.resize(x.size());
+  std::copy(x.begin(), x.end(), set.position.begin());
+  // Depth below the surface per sample (0 for a shell): the weights' interior term.
+  std::vector<float> depth(x.size(), 0.0f);
+  if (sdf)
+    core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) {
+      depth[static_cast<std::size_t>(i)] = std::max(0.0f, -sdf->distance(x[static_cast<std::size_t>(i)]));
+    });
+  WeightParams wp{params.support_factor, params.phi_offset, params.rest_density};
+  FF_CHECK(compute_weights(set, depth, wp));
+  return set;
+}
+
+}  // namespace
+
 Result<ControlSet> sample_target(const io::TriangleMesh& mesh, const SamplingParams& params, std::uint8_t target,
                                  SampleReport* report, core::Progress& progress) {
   FF_CHECK(params.validate());
@@ -279,86 +366,23 @@ Result<ControlSet> sample_target(const io::TriangleMesh& mesh, const SamplingPar
                                    rep.volume, d));
 
   std::vector<Vec3f> x;
-  std::vector<float> depth;
   switch (rep.method) {
-    case Method::Voxel:
-      x = voxel_samples(field, d);
-      break;
+    case Method::Voxel: x = voxel_samples(field, d); break;
     case Method::BlueNoise: {
-      rep.candidates = 2 * n;
-      const auto cand = random_interior_points(*sdf, field.bounds(), rep.candidates, params.seed);
-      if (cand.size() < n)
-        return input_error(fmt::format("the target's volume could not be sampled ({} of {} interior points found)",
-                                       cand.size(), n));
-      EliminationParams ep;
-      ep.d_max = static_cast<float>(2.0 * volume_r_max(rep.volume, n));
-      const auto keep = eliminate_samples(cand, n, ep, progress);
-      x.reserve(keep.size());
-      for (Index k : keep) x.push_back(cand[k]);
-      RelaxParams rp;
-      rp.spacing = d;
-      rp.steps = params.relax_steps;
-      double t = watch.seconds();
-      rep.t_init = t - rep.t_sdf - rep.t_field;
-      relax_samples(x, *sdf, rp, progress);
-      rep.t_relax = watch.seconds() - t;
-      t = watch.seconds();
-      // First the exact inside test (the interpolated grid can disagree by a fraction of a node in thin
-      // walls and near a hole's mouth, where the winding number is close to ½).
-      // The few outside are moved just below their exact closest surface point, or dropped if that fails.
-      std::vector<std::uint8_t> in(x.size());
-      field.inside(x, in);
-      std::size_t k = 0;
-      for (std::size_t i = 0; i < x.size(); ++i) {
-        if (!in[i]) {
-          const MeshField::Closest c = field.closest(x[i]);
-          const Vec3f moved = c.point - 0.15f * d * c.normal;
-          if (!field.inside(moved)) continue;
-          x[i] = moved;
-        }
-        x[k++] = x[i];
-      }
-      const std::size_t outside = x.size() - k;
-      x.resize(k);
-      // The acceptance rules of a blue-noise set, made exact: nothing closer than 0.85 d, and thin parts
-      // the relaxation emptied get samples back (typically a handful per ten thousand).
-      const auto surface_points = static_cast<std::size_t>(std::min(64.0 * rep.area / (double(d) * d), 16e6));
-      const auto surface = random_surface_points(mesh, surface_points, params.seed ^ 0x5EEDull);
-      rep.repaired_dropped = outside + enforce_spacing(x, *sdf, 0.85f * d, surface, &rep.repaired_added);
-      rep.t_repair = watch.seconds() - t;
+      FF_TRY(x, blue_noise_samples(mesh, field, *sdf, params, d, n, rep, watch, progress));
       break;
     }
-    case Method::Surface: {
-      rep.candidates = 4 * n;
-      const auto cand = random_surface_points(mesh, rep.candidates, params.seed);
-      EliminationParams ep;
-      ep.d_max = static_cast<float>(2.0 * surface_r_max(rep.area, n));
-      const auto keep = eliminate_samples(cand, n, ep, progress);
-      x.reserve(keep.size());
-      for (Index k : keep) x.push_back(cand[k]);
-      break;
-    }
+    case Method::Surface: x = surface_samples(mesh, params, n, rep, progress); break;
   }
   const std::size_t before = x.size();
   x = drop_sparse(std::move(x), params.sparse, params.seed);
+  const double t_w = watch.seconds();
   rep.dropped = before - x.size();
   if (x.empty())
     return input_error(rep.dropped ? "the sparse-sampling options removed every sample"
                                    : "the target holds no sample at this spacing; use a smaller spacing");
 
-  ControlSet set;
-  set.target = target;
-  set.spacing = d;
-  set.resize(x.size());
-  std::copy(x.begin(), x.end(), set.position.begin());
-  depth.assign(x.size(), 0.0f);
-  if (sdf)
-    core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) {
-      depth[static_cast<std::size_t>(i)] = std::max(0.0f, -sdf->distance(x[static_cast<std::size_t>(i)]));
-    });
-  WeightParams wp{params.support_factor, params.phi_offset, params.rest_density};
-  const double t_w = watch.seconds();
-  FF_CHECK(compute_weights(set, depth, wp));
+  FF_TRY(ControlSet set, weighted_set(x, sdf ? &*sdf : nullptr, params, d, target));
   rep.t_weights = watch.seconds() - t_w;
   rep.samples = set.size();
   rep.seconds = watch.seconds();
