@@ -11,7 +11,7 @@ namespace ff::control {
 
 Status ControlSamples::init(std::vector<ControlTarget> targets, std::string_view who, const SampleOptions& options) {
   options_ = options;
-  FF_TRY(CheckedTargets checked, check_targets(std::move(targets), who));
+  FF_TRY(CheckedTargets checked, validate_control_targets(std::move(targets), who));
   hc = checked.hc;
   phases_ = std::move(checked.phases);
   start_ = std::move(checked.start);

@@ -3,7 +3,7 @@
 // kept at the targets' current pose — keyframed motion, live steering (control/steering.h), mesh swaps (morph
 // phases) — with their pose velocity u_c (the paper's v_c), optionally sorted by cell for locality, optionally with
 // the boundary normals of eq. 16. `adaptive` and every baseline hold one, so they see the same samples at the same
-// pose and accept and reject the same scenes (check_targets).
+// pose and accept and reject the same scenes (validate_control_targets).
 #include "control/control_targets.h"
 #include "control/target_motion.h"
 #include "core/error.h"

@@ -8,7 +8,7 @@
 
 namespace ff::control {
 
-Result<CheckedTargets> check_targets(std::vector<ControlTarget> targets, std::string_view who) {
+Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targets, std::string_view who) {
   CheckedTargets c;
   if (targets.empty()) return param_error(fmt::format("controller {}: the scene has no targets", who));
   if (targets.size() > 250) return param_error(fmt::format("controller {}: {} targets, at most 250", who, targets.size()));

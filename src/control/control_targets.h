@@ -35,7 +35,7 @@ struct CheckedTargets {
 };
 
 /// Errors name `who` (the controller) and the target.
-Result<CheckedTargets> check_targets(std::vector<ControlTarget> targets, std::string_view who);
+Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targets, std::string_view who);
 
 /// S_0 = Σ_k |g_k|² over a full resting lattice neighbourhood, g_k = (m_p/ρ_ref) ∇W_spiky(k d, H_c): what a filled
 /// interior control particle sees; the scale of the density constraints' ε_c (METHOD §a.3).

@@ -14,7 +14,7 @@
 
 namespace ff::pipeline {
 
-Result<std::vector<TargetGeometry>> load_targets(const scene::Scene& scene) {
+Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene) {
   std::vector<TargetGeometry> out;
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
     io::MeshLoadStats st;

@@ -28,7 +28,7 @@ struct TargetGeometry {
 };
 
 /// Loads every target with its transform. Errors name the target.
-Result<std::vector<TargetGeometry>> load_targets(const scene::Scene& scene);
+Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);
 
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
 /// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at

@@ -23,13 +23,13 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   if (options.controller) s->scene_.controller.name = *options.controller;
   FF_CHECK(s->scene_.controller.validate());
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
-  FF_TRY(s->geometry_, load_targets(s->scene_));
+  FF_TRY(s->geometry_, load_target_meshes(s->scene_));
   FF_CHECK(complete_scene(s->scene_, s->geometry_));
   FF_CHECK(sim::fill_sources(s->scene_.fluid, s->scene_.domain, s->scene_.solver.particle_radius, s->initial_));
   assign_targets(s->initial_, s->geometry_);
   if (s->initial_.size() == 0) return input_error("the scene creates no fluid particles");
   FF_CHECK(io::ensure_writable_dir(options.cache_dir));
-  FF_TRY(PreparedTargets prepared, prepare_targets(s->scene_, s->geometry_, options.cache_dir, options.cache_dir, progress));
+  FF_TRY(TargetSetup prepared, setup_targets(s->scene_, s->geometry_, options.cache_dir, options.cache_dir, progress));
   s->controls_ = std::move(prepared.controls);
   s->shapes_ = std::move(prepared.shapes);
   s->motions_ = std::move(prepared.motions);

@@ -1,5 +1,5 @@
 #pragma once
-// A scene stepped one frame at a time, for the live viewer (`fluidform serve SCENE.json`, issue 7): loaded, completed
+// A scene stepped one frame at a time, for the live viewer (`fluidform serve SCENE.json`): loaded, completed
 // and sampled exactly as `fluidform run` does (app/scene_setup.h), then steered between frames — a target moved or
 // rotated (control/steering.h), its mesh swapped for another of the scene's meshes, the controller switched, the run
 // restarted. Not thread-safe: one thread (the server's simulation thread) owns it.

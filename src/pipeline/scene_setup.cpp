@@ -23,7 +23,7 @@ Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const f
                                core::Progress& progress, const std::string& where) {
   scene::TargetSpec spec = scene.targets[t];
   spec.mesh = mesh_path;
-  FF_TRY(TargetControls tc, prepare_target(spec, target_sampling(scene), static_cast<std::uint8_t>(t), cache_dir, progress));
+  FF_TRY(TargetControls tc, sample_target_cached(spec, target_sampling(scene), static_cast<std::uint8_t>(t), cache_dir, progress));
   const auto fail = [&](const Error& e) {
     return Error{e.kind, where.empty() ? e.message : fmt::format("{}: {}", where, e.message)};
   };
@@ -35,13 +35,13 @@ Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const f
   return MeshPhase{std::move(tc.set), std::move(*shape)};
 }
 
-Result<PreparedTargets> prepare_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
+Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const fs::path& cache_dir, const fs::path& report_dir,
                                         core::Progress& progress) {
-  PreparedTargets out;
+  TargetSetup out;
   const sampling::SamplingParams sp = target_sampling(scene);
   for (std::size_t i = 0; i < scene.targets.size(); ++i) {
-    FF_TRY(TargetControls tc, prepare_target(scene.targets[i], sp, static_cast<std::uint8_t>(i), cache_dir, progress));
+    FF_TRY(TargetControls tc, sample_target_cached(scene.targets[i], sp, static_cast<std::uint8_t>(i), cache_dir, progress));
     for (const auto& w : tc.report.warnings) spdlog::warn("target {}: {}", i, w);
     if (tc.from_cache)
       spdlog::info("target {}: {} control particles from the cache ({})", i, tc.set.size(), tc.cache_file.filename().string());

@@ -48,7 +48,7 @@ Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const s
                                const std::string& where = "");
 
 /// Every target of a completed scene, ready for make_controller and the metrics.
-struct PreparedTargets {
+struct TargetSetup {
   std::vector<control::ControlTarget> controls;  ///< handed to make_controller (moved out)
   std::vector<TargetShapes> shapes;
   std::vector<control::TargetMotion> motions;
@@ -57,8 +57,8 @@ struct PreparedTargets {
 };
 
 /// Samples (or loads from `cache_dir`) every target of `scene` (completed by complete_scene, `geometry` from
-/// load_targets) and its mesh swaps. Errors name the target.
-Result<PreparedTargets> prepare_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
+/// load_target_meshes) and its mesh swaps. Errors name the target.
+Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const std::filesystem::path& cache_dir,
                                         const std::filesystem::path& report_dir, core::Progress& progress);
 

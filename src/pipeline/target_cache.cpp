@@ -55,7 +55,7 @@ Result<std::uint64_t> sampling_key(const scene::TargetSpec& target, const sampli
   return sim::fnv1a(b, h);
 }
 
-Result<TargetControls> prepare_target(const scene::TargetSpec& target, const sampling::SamplingParams& params,
+Result<TargetControls> sample_target_cached(const scene::TargetSpec& target, const sampling::SamplingParams& params,
                                       std::uint8_t id, const fs::path& cache_dir, core::Progress& progress) {
   FF_TRY(const std::uint64_t key, sampling_key(target, params));
   TargetControls out;

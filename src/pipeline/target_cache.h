@@ -23,7 +23,7 @@ Result<std::uint64_t> sampling_key(const scene::TargetSpec& target, const sampli
 
 /// Loads `target`'s controls from `cache_dir` when a file with the same key is there; otherwise loads the
 /// mesh, samples it and writes the cache file (atomically; a failed write only costs a warning).
-Result<TargetControls> prepare_target(const scene::TargetSpec& target, const sampling::SamplingParams& params,
+Result<TargetControls> sample_target_cached(const scene::TargetSpec& target, const sampling::SamplingParams& params,
                                       std::uint8_t id, const std::filesystem::path& cache_dir, core::Progress& progress);
 
 }  // namespace ff::pipeline
