@@ -16,6 +16,7 @@
 #include "control/steering.h"
 #include "sim/controller.h"
 
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -35,6 +36,17 @@ struct DensitySpringConfig {
   bool per_sample_density = false;  ///< ρ_0,i = ρ_c,i (weighted) instead of one ρ_0 (pbfc)
   float kappa = 0.0f;         ///< colour-field weight w_i = 1 + κ (1 − cf_i/max cf); 0 → w_i = 1
 };
+
+/// The fields pbfc's and weighted's parameter structs share, copied into a config that each then completes.
+template <class P>
+DensitySpringConfig density_spring_config(const P& params, std::string name) {
+  DensitySpringConfig cfg;
+  cfg.name = std::move(name);
+  cfg.alpha = params.alpha, cfg.epsilon = params.epsilon;
+  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
+  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  return cfg;
+}
 
 class DensitySpringController final : public sim::Controller, public Steerable {
  public:

@@ -7,11 +7,7 @@ namespace ff::control {
 Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                    const PbfcParams& params) {
   FF_CHECK(params.validate());
-  DensitySpringConfig cfg;
-  cfg.name = "pbfc";
-  cfg.alpha = params.alpha, cfg.epsilon = params.epsilon;
-  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
-  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  DensitySpringConfig cfg = density_spring_config(params, "pbfc");
   cfg.velocity = params.velocity, cfg.velocity_moving = params.velocity_moving;
   FF_TRY(auto c, DensitySpringController::create(std::move(targets), ctx, std::move(cfg)));
   return std::unique_ptr<sim::Controller>(std::move(c));

@@ -7,11 +7,8 @@ namespace ff::control {
 Result<std::unique_ptr<sim::Controller>> make_controller(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                        const WeightedParams& params) {
   FF_CHECK(params.validate());
-  DensitySpringConfig cfg;
-  cfg.name = "weighted";
-  cfg.alpha = params.alpha, cfg.epsilon = params.epsilon, cfg.kappa = params.kappa;
-  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
-  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  DensitySpringConfig cfg = density_spring_config(params, "weighted");
+  cfg.kappa = params.kappa;
   cfg.velocity = cfg.velocity_moving = 0.0f;
   cfg.per_sample_density = true;
   FF_TRY(auto c, DensitySpringController::create(std::move(targets), ctx, std::move(cfg)));

@@ -289,19 +289,7 @@ std::size_t drop_degenerate(TriangleMesh& mesh) {
   const std::size_t dropped = mesh.triangles.size() - kept;
   mesh.triangles.resize(kept);
 
-  // New index = rank among the referenced vertices, so the relative order stays the same.
-  std::vector<Index> remap(mesh.vertices.size(), kInvalidIndex);
-  for (const auto& t : mesh.triangles)
-    for (const Index i : t) remap[i] = 0;
-  Index next = 0;
-  for (std::size_t i = 0; i < remap.size(); ++i)
-    if (remap[i] == 0) {
-      remap[i] = next;
-      mesh.vertices[next++] = mesh.vertices[i];
-    }
-  mesh.vertices.resize(next);
-  for (auto& t : mesh.triangles)
-    for (Index& i : t) i = remap[i];
+  drop_unused_vertices(mesh);  // in their relative order
   return dropped;
 }
 

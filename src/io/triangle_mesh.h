@@ -18,4 +18,22 @@ struct TriangleMesh {
   }
 };
 
+/// Removes the vertices no triangle uses; the others keep their relative order (new index = rank among the used).
+/// Returns the map old → new index (kInvalidIndex: removed).
+inline std::vector<Index> drop_unused_vertices(TriangleMesh& mesh) {
+  std::vector<Index> map(mesh.vertices.size(), kInvalidIndex);
+  for (const auto& t : mesh.triangles)
+    for (const Index v : t) map[v] = 0;
+  Index next = 0;
+  for (std::size_t v = 0; v < map.size(); ++v)
+    if (map[v] != kInvalidIndex) {
+      map[v] = next;
+      mesh.vertices[next++] = mesh.vertices[v];
+    }
+  mesh.vertices.resize(next);
+  for (auto& t : mesh.triangles)
+    for (Index& v : t) v = map[v];
+  return map;
+}
+
 }  // namespace ff::io

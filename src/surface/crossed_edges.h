@@ -77,6 +77,17 @@ inline std::int64_t owner_block(const std::array<std::int64_t, 8>& up, int n[3])
   return up[s];
 }
 
+/// The vertex on the grid edge that leaves corner `corner` (bits x, y, z) of cell (i, j, k) of a block whose upper
+/// neighbours are `up`; `edge_of(n)` numbers the edge at node n of its owner block. −1 when the owner was not kept
+/// or the edge is not crossed.
+template <class Edges, class EdgeOf>
+std::int64_t cell_edge_vertex(const Edges& edges, const std::array<std::int64_t, 8>& up, int i, int j, int k,
+                              int corner, EdgeOf&& edge_of) {
+  int n[3] = {i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1)};
+  const std::int64_t owner = owner_block(up, n);
+  return owner < 0 ? -1 : edges.vertex(owner, edge_of(n));
+}
+
 /// Where φ crosses iso on the grid edge from local node l of the block at block coordinates c to l + step
 /// (step ∈ {0, 1}³): the position, kept 1 % of the edge away from either node, and the global id of the nearer
 /// node (the vertex's regularisation cell).

@@ -85,9 +85,8 @@ Result<McMesh> marching_cubes(const SparseField& field) {
     auto& bc = centres[std::size_t(b)];
     auto vertex_of = [&](int i, int j, int k, int e) -> Index {
       const CubeEdge ce = McTable::edge(e);
-      int n[3] = {i + (ce.c0 & 1), j + ((ce.c0 >> 1) & 1), k + ((ce.c0 >> 2) & 1)};
-      const std::int64_t owner = owner_block(up[std::size_t(b)], n);
-      const std::int64_t id = owner < 0 ? -1 : edges.vertex(owner, node_edge(n[0], n[1], n[2], ce.axis));
+      const std::int64_t id = cell_edge_vertex(edges, up[std::size_t(b)], i, j, k, ce.c0,
+                                               [&](const int* n) { return node_edge(n[0], n[1], n[2], ce.axis); });
       if (id < 0) {
         broken = true;
         return 0;

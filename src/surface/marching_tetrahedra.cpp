@@ -154,9 +154,8 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
     const float* v = field.values[std::size_t(b)].data();
     auto& bt = tris[std::size_t(b)];
     auto vertex_of = [&](int i, int j, int k, const TetEdge& te) -> Index {
-      int n[3] = {i + (te.lo & 1), j + ((te.lo >> 1) & 1), k + ((te.lo >> 2) & 1)};
-      const std::int64_t owner = owner_block(up[std::size_t(b)], n);
-      const std::int64_t id = owner < 0 ? -1 : edges.vertex(owner, node_edge(n[0], n[1], n[2], te.dir));
+      const std::int64_t id = cell_edge_vertex(edges, up[std::size_t(b)], i, j, k, te.lo,
+                                               [&](const int* n) { return node_edge(n[0], n[1], n[2], te.dir); });
       if (id < 0) {
         broken = true;
         return 0;

@@ -70,24 +70,11 @@ Components connected_components(const io::TriangleMesh& mesh) {
 }
 
 std::vector<Index> keep_triangles(io::TriangleMesh& mesh, const std::vector<unsigned char>& keep) {
-  std::vector<Index> map(mesh.vertices.size(), kInvalidIndex);
   std::size_t out_t = 0;
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    if (!keep[f]) continue;
-    for (const Index v : mesh.triangles[f]) map[v] = 0;
-    mesh.triangles[out_t++] = mesh.triangles[f];
-  }
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    if (keep[f]) mesh.triangles[out_t++] = mesh.triangles[f];
   mesh.triangles.resize(out_t);
-  Index next = 0;
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-    if (map[v] != kInvalidIndex) {
-      map[v] = next;
-      mesh.vertices[next++] = mesh.vertices[v];
-    }
-  mesh.vertices.resize(next);
-  for (auto& t : mesh.triangles)
-    for (auto& v : t) v = map[v];
-  return map;
+  return io::drop_unused_vertices(mesh);
 }
 
 }  // namespace ff::surface
