@@ -22,7 +22,7 @@ struct RunCli {
   std::string controller;
 };
 
-// The one-screen summary (issue 4): the paper's Table 3 columns and the numbers that keep E honest.
+// The one-screen summary: the paper's Table 3 columns and the numbers that keep E honest.
 void print_summary(const pipeline::RunSummary& sum) {
   fmt::print(stdout,
              "\n  controller           {}\n"

@@ -1,7 +1,7 @@
 #pragma once
 // Parameters of the paper's controller, `adaptive` (METHOD.md §a.2–§a.6, defaults of §a.9 and §a.10).
 // Every component can be switched off or set to its literal paper reading, so its contribution can be
-// measured (issue 4's ablations). JSON keys in scene files ("controller": {"adaptive": {...}}) are the
+// measured (the ablations of bench/RESULTS.md). JSON keys in scene files ("controller": {"adaptive": {...}}) are the
 // field names; enums are strings.
 #include "control/controller_info.h"
 #include "core/error.h"

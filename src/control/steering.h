@@ -1,5 +1,5 @@
 #pragma once
-// Live steering (issue 7, `fluidform serve`): a controller whose targets can be moved while it runs. The live viewer
+// Live steering (`fluidform serve`): a controller whose targets can be moved while it runs. The live viewer
 // drags a target; the server calls set_target_pose between two frames and the samples move there from the next
 // sub-step on (paper §5.2, Table 2 "AR editing motion"). Controllers that have targets implement it (adaptive and the
 // baselines through BaselineCore); `none` does not, and steerable() then gives nullptr.

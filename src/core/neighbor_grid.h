@@ -1,5 +1,8 @@
 #pragma once
-// Uniform-grid neighbour search with compact (CSR) neighbour lists.
+// Uniform-grid neighbour search with compact (CSR) neighbour lists: the cell-sorted fixed-radius search of
+// Green ("Particle Simulation using CUDA", NVIDIA 2010) and Hoetzlein ("Fast Fixed-Radius Nearest Neighbors",
+// GTC 2014), with Ihmsen et al.'s hashed fallback for sparse domains ("A Parallel SPH Implementation on Multi-Core
+// CPUs", CGF 2011) and compressed lists in the spirit of Band et al. ("Compressed Neighbour Lists for SPH", CGF 2020).
 //
 // Points are binned into cubic cells of edge `radius` by a stable parallel counting sort, so each
 // cell's points are one contiguous run of `sorted()`. Queries are answered one cell at a time: the

@@ -1,20 +1,13 @@
 #pragma once
 // Blue-noise relaxation of volume samples. METHOD.md §c.3 describes SPlisHSPlasH's SPH relaxations
-// (Jiang et al. 2015, Kugelstadt et al. 2021). Two position-based forms were measured on a sphere and a
-// box (N = V/d³ samples after sample elimination; /tmp harness, figures in the closing note of issue 3):
-//   - PBF density projection, repulsive only: with N = V/d³ the kernel-sum density sits at or below ρ0,
-//     the constraint goes slack and the boundary projection clumps samples at the surface
-//     (nearest-neighbour minimum 0.38 d);
-//   - hard minimum-distance constraints at 1.1 d: even spacing (minimum 0.90 d) but the set jams with
-//     voids (largest empty sphere 0.93–1.05 d).
-// What is used: Jiang's idea of a repulsive pressure in its simplest form, a soft pair potential
-// (1 − r/r_c)³ of range r_c = 1.75 d minimised by annealed gradient descent, plus a projection of every
-// sample shallower than `boundary_depth`·d back to that depth along the SDF gradient. With N = V/d³ the
-// set stays under slight pressure, so it spreads evenly up to the surface layer and voids close:
-// minimum distance 0.89–0.92 d, largest empty sphere 0.83–0.84 d on both shapes. Samples pressed flat
-// against the surface left the middle of thin walls (a vase, 2 d thick) uncovered and met at the
-// projection in thin parts (the bunny's ears); a half-strength repulsion by each sample's mirror image
-// across the surface keeps them about d/2 deep (sphere 0.90 d / 0.82 d, box 0.88 d / 0.81 d).
+// (Jiang et al. 2015, Kugelstadt et al. 2021); what is used is Jiang's idea of a repulsive pressure in its
+// simplest form: a soft pair potential (1 − r/r_c)³ of range r_c = 1.75 d minimised by annealed gradient
+// descent, plus a projection of every sample shallower than `boundary_depth`·d back to that depth along the SDF
+// gradient. With N = V/d³ the set stays under slight pressure, so it spreads evenly up to the surface layer and
+// voids close. A half-strength repulsion by each sample's mirror image across the surface keeps the surface
+// layer about d/2 deep, so thin walls stay covered. The two position-based forms that lost (a PBF density
+// projection, hard minimum-distance constraints) and the figures are in bench/RESULTS.md, "Sampling: the
+// relaxation".
 #include "core/progress.h"
 #include "core/types.h"
 #include "sampling/sdf_grid.h"

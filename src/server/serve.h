@@ -1,5 +1,5 @@
 #pragma once
-// `fluidform serve SCENE.json | OUT/` (issue 7): the live viewer. A scene runs live in a background thread and every
+// `fluidform serve SCENE.json | OUT/`: the live viewer. A scene runs live in a background thread and every
 // frame goes to the browsers as a binary message (server/frame_codec.h); a finished run's folder is played back
 // (its particle frames through the same stream, its animation.glb as a file for the viewer). The viewer's files are
 // web/ and three.js from node_modules/three, served as they are (web/index.html maps "three" with an import map).
