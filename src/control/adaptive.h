@@ -92,7 +92,7 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   std::vector<PackedSample> sample_xw_;
   std::vector<Index> nearest_;              // fluid j → its nearest bonded sample (kInvalidIndex: none)
   std::vector<Index> cursor_;               // per thread × fluid: bond counts, then write cursors
-  std::vector<Index> mask_group_start_;             // per sample: first group of four pairs in bond_mask_
+  std::vector<Index> mask_group_start_;     // per sample: first group of four pairs in bond_mask_
   std::vector<std::uint8_t> bond_mask_;     // per group of four sample → fluid pairs: which are bonds
   std::vector<Index> seeds_, active_;  // active_: samples with λ > 0 in the current iteration
   std::vector<Vec3f> dx_;                // scattered control corrections (few active samples)

@@ -1,4 +1,4 @@
-// End-to-end tests of `fluidform compare` (issue 5): one row per controller in table.md / table.csv, the
+// End-to-end tests of `fluidform compare`: one row per controller in table.md / table.csv, the
 // controller beats plain PBF, an unknown controller name is refused before anything runs, and the error-rate
 // column is the same when the compare is run again.
 #include "pipeline/compare.h"

@@ -1,4 +1,4 @@
-// End-to-end tests of meshing (issue 6): `fluidform mesh` on particle frames, `run`'s final mesh of the formed
+// End-to-end tests of meshing: `fluidform mesh` on particle frames, `run`'s final mesh of the formed
 // default bunny judged against the target, and the exports opened where users open them (three.js and the
 // Khronos validator through node, Blender headless).
 #include "e2e/cli_support.h"
@@ -175,7 +175,7 @@ TEST(MeshCommand, BadInputIsOneLineAndWritesNoMesh) {
   expect_no_temp_files(dir);
 }
 
-// Issue 6's acceptance on the formed default bunny: final.obj is watertight, manifold, one component, ≤ 20k
+// The meshing acceptance on the formed default bunny: final.obj is watertight, manifold, one component, ≤ 20k
 // triangles and within 1 d of the target; reduction + decimation cut ≥ 40 % of plain marching cubes' triangles at
 // equal or better distance; Blender imports it and auto-rigs it, and plays the GLB and the point cache.
 TEST(MeshAcceptance, FormedDefaultBunny) {

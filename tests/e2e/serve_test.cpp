@@ -1,4 +1,4 @@
-// `fluidform serve` end to end (issue 7): the viewer in Debian's chromium, headless and off the network, driven by
+// `fluidform serve` end to end: the viewer in Debian's chromium, headless and off the network, driven by
 // playwright-core from web/test/viewer.test.mjs against the real server — frames, a screenshot with particles, the
 // HUD, dragging a target and the error rate against the moved target, path traversal and garbage messages on the
 // real port, rotating and swapping the target, WebXR (VR and AR with a controller drag) on an emulated headset (IWER),

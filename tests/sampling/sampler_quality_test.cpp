@@ -1,4 +1,4 @@
-// Blue-noise volume sampling quality on a family of meshes (issue 3's acceptance list), at a few
+// Blue-noise volume sampling quality on a family of meshes, at a few
 // thousand samples each: minimum pairwise distance ≥ 0.85 d, no point of the volume farther than
 // 0.9 d from a sample (dense probes), count within ±5 % of V/d³ (V by Monte Carlo with the winding
 // number, independent of the sampler's own estimate), every sample inside (signed distance ≤ 0.25 d).
