@@ -292,7 +292,7 @@ std::vector<Vec3f> surface_samples(const io::TriangleMesh& mesh, const SamplingP
 
 /// The control set of the sample positions `x`, with their weights (paper eq. 1–4; sampling/weights.h).
 Result<ControlSet> weighted_set(const std::vector<Vec3f>& x, const SdfGrid* sdf, const SamplingParams& params, float d,
-                                std::uint8_t target) {
+                                std::uint8_t target, double& weight_seconds) {
   ControlSet set;
   set.target = target;
   set.spacing = d;
@@ -305,7 +305,9 @@ Result<ControlSet> weighted_set(const std::vector<Vec3f>& x, const SdfGrid* sdf,
       depth[static_cast<std::size_t>(i)] = std::max(0.0f, -sdf->distance(x[static_cast<std::size_t>(i)]));
     });
   WeightParams wp{params.support_factor, params.phi_offset, params.rest_density};
+  core::Stopwatch watch;
   FF_CHECK(compute_weights(set, depth, wp));
+  weight_seconds = watch.seconds();
   return set;
 }
 
@@ -376,14 +378,12 @@ Result<ControlSet> sample_target(const io::TriangleMesh& mesh, const SamplingPar
   }
   const std::size_t before = x.size();
   x = drop_sparse(std::move(x), params.sparse, params.seed);
-  const double t_w = watch.seconds();
   rep.dropped = before - x.size();
   if (x.empty())
     return input_error(rep.dropped ? "the sparse-sampling options removed every sample"
                                    : "the target holds no sample at this spacing; use a smaller spacing");
 
-  FF_TRY(ControlSet set, weighted_set(x, sdf ? &*sdf : nullptr, params, d, target));
-  rep.t_weights = watch.seconds() - t_w;
+  FF_TRY(ControlSet set, weighted_set(x, sdf ? &*sdf : nullptr, params, d, target, rep.t_weights));
   rep.samples = set.size();
   rep.seconds = watch.seconds();
   if (report) *report = std::move(rep);

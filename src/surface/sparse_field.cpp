@@ -184,7 +184,8 @@ std::vector<std::uint64_t> candidate_blocks(const Binned& bins, const SparseFiel
   return candidates;
 }
 
-/// The kernel in cell units: (h² − r²)³ summed into a block's nodes, scaled by `weight` once per node at the end.
+/// The support of the poly6 kernel in cell units; splat_particle adds the unscaled (h² − r²)³ and the caller applies
+/// the kernel's constant once per node.
 struct Splat {
   float hc;      // support in cells
   float h2;      // hc²
