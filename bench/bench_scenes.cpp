@@ -3,11 +3,15 @@
 // that keep E honest (METHOD §d). Scenes: the bunny, a thin-limbed star figure, a hollow vase, a torus, a
 // lattice of thin tubes, the bunny with 30 % of its samples removed in a box, and three targets at once.
 //   build/release/bench/bench_scenes [--quick] [--ablations] [--speed] [--only NAME] [--frames N] [--keep DIR]
+//                                    [--patch JSON]
 // --quick: ~3k control particles per scene instead of ~10k. --ablations: the bunny and the star with each
 // component of `adaptive` switched off or set to its paper reading. --speed: the speed scenes, the bunny
 // at ~10k and ~100k particles and the three-target scene. Runs stop once formed (cap 600 frames) unless --frames
 // is given. Frame times are medians over the run's frames (metrics.csv): over all of them, and over the frames
-// after the shape formed (steady state, what a viewer sees once the forming is done).
+// after the shape formed (steady state, what a viewer sees once the forming is done). --patch: a JSON merge patch
+// (RFC 7386) applied to every scene, to compare a setting against the defaults with one build, e.g.
+// --patch '{"solver":{"cfl":0.8}}'. The family includes a moving target: the bunny carried 0.4 m sideways and
+// turned 45° while it forms.
 #include "support/shapes.h"
 #include "support/test_support.h"
 
@@ -77,6 +81,7 @@ std::pair<double, double> frame_medians(const fs::path& csv, double formed_s) {
 int main(int argc, char** argv) {
   bool quick = false, ablations = false, speed = false;
   std::string only, frames;
+  json patch = json::object();
   fs::path keep;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -86,8 +91,16 @@ int main(int argc, char** argv) {
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--frames" && i + 1 < argc) frames = argv[++i];
     else if (a == "--keep" && i + 1 < argc) keep = argv[++i];
+    else if (a == "--patch" && i + 1 < argc) {
+      patch = json::parse(argv[++i], nullptr, false);
+      if (patch.is_discarded() || !patch.is_object()) {
+        fmt::print(stderr, "bench_scenes: --patch wants a JSON object\n");
+        return 2;
+      }
+    }
     else {
-      fmt::print(stderr, "usage: bench_scenes [--quick] [--ablations] [--speed] [--only NAME] [--frames N] [--keep DIR]\n");
+      fmt::print(stderr, "usage: bench_scenes [--quick] [--ablations] [--speed] [--only NAME] [--frames N] [--keep DIR] "
+                          "[--patch JSON]\n");
       return 2;
     }
   }
@@ -133,6 +146,8 @@ int main(int argc, char** argv) {
     scenes.push_back({"bunny-sparse", scene({bunny_t}, {{"sampling", {{"auto_count", count},
         {"sparse", {{"drop_boxes", json::array({{{"min", {-0.5, 0.0, -0.4}}, {"max", {-0.17, 1.0, 0.4}}}})}}}}}})});
     scenes.push_back({"three-targets", scene(three)});
+    scenes.push_back({"bunny-moving", scene({target("bunny.obj", {{"scale", 0.1}, {"keyframes", json::array({
+        {{"time", 0.5}, {"translate", {0, 0, 0}}}, {{"time", 2.5}, {"translate", {0.4, 0, 0}}, {"rotate", {0, 45, 0}}}})}})})});
   } else {
     const std::vector<std::pair<std::string, json>> variants = {
         {"default", json::object()},
@@ -153,7 +168,9 @@ int main(int argc, char** argv) {
     const auto& s = scenes[k];
     if (!only.empty() && s.name.find(only) == std::string::npos) continue;
     const fs::path file = dir / fmt::format("scene_{}.json", k), out = dir / fmt::format("out_{}", k);
-    std::ofstream(file) << s.scene.dump(2);
+    json patched = s.scene;
+    patched.merge_patch(patch);
+    std::ofstream(file) << patched.dump(2);
     const std::string cmd = fmt::format("'{}' -q run '{}' -o '{}' {} 2>&1", test::binary().string(), file.string(),
                                         out.string(), frames.empty() ? "" : "--frames " + frames);
     const std::string log = run(cmd);
