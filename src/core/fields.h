@@ -42,6 +42,7 @@ struct FieldInfo {
   std::string_view doc;      ///< one line for the key table (units first)
   bool required = false;     ///< the scene must give it (no usable default)
   bool scalar_ok = false;    ///< a Vec3f that may also be given as one number for all three (a uniform scale)
+  bool either_sign = false;  ///< a Vec3f whose components' magnitudes lie in the range, of either sign (a mirror)
   bool ranged() const { return lo > -std::numeric_limits<double>::infinity() || hi < std::numeric_limits<double>::infinity(); }
 };
 
@@ -53,6 +54,7 @@ constexpr FieldInfo open(double lo, double hi, std::string_view doc) { return {l
 constexpr FieldInfo plain(std::string_view doc) { FieldInfo i; i.doc = doc; return i; }
 constexpr FieldInfo required(FieldInfo i) { i.required = true; return i; }
 constexpr FieldInfo scalar_ok(FieldInfo i) { i.scalar_ok = true; return i; }
+constexpr FieldInfo either_sign(FieldInfo i) { i.either_sign = true; return i; }
 
 /// An enum value and its name in scene files.
 template <class E>
@@ -106,7 +108,7 @@ Status validate_fields(const P& params, std::string_view path) {
     } else if constexpr (IsFieldList<T>::value) {
       for (std::size_t i = 0; i < v.size() && st.ok(); ++i) st = validate_fields(v[i], fmt::format("{}.{}[{}]", path, key, i));
     } else if constexpr (std::is_same_v<T, Vec3f>) {
-      if (info.ranged()) st = check_vec(path, key, v, info.lo, info.hi);
+      if (info.ranged()) st = check_vec(path, key, v, info.lo, info.hi, info.either_sign);
     } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
       if (info.ranged()) st = check_range(path, key, static_cast<double>(v), info.lo, info.hi, info.lb, info.hb);
     }
@@ -129,7 +131,8 @@ void key_rows(std::string_view path, std::vector<KeyRow>& rows, const P& default
   P::fields(defaults, [&](std::string_view key, const auto& v, const FieldInfo& info) {
     using T = std::remove_cvref_t<decltype(v)>;
     const std::string k = path.empty() ? std::string(key) : fmt::format("{}.{}", path, key);
-    KeyRow r{k, "", "", info.ranged() ? format_range(info.lo, info.hi, info.lb, info.hb) : "", std::string(info.doc)};
+    KeyRow r{k, "", "", info.ranged() ? (info.either_sign ? "±" : "") + format_range(info.lo, info.hi, info.lb, info.hb) : "",
+             std::string(info.doc)};
     if (info.required) r.default_value = "required";
     if constexpr (HasFields<T>) {
       key_rows(k, rows, v);

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <unistd.h>
 
 namespace ff::core {
 namespace {
@@ -26,5 +27,9 @@ double status_kib(const char* key) {
 
 double peak_rss_mib() { return status_kib("VmHWM") / 1024.0; }
 double current_rss_mib() { return status_kib("VmRSS") / 1024.0; }
+double machine_memory_mib() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), size = ::sysconf(_SC_PAGESIZE);
+  return pages > 0 && size > 0 ? double(pages) * double(size) / (1024.0 * 1024.0) : 0.0;
+}
 
 }  // namespace ff::core

@@ -6,5 +6,7 @@ namespace ff::core {
 double peak_rss_mib();
 /// Current resident set size in MiB (Linux VmRSS), 0 if unknown.
 double current_rss_mib();
+/// The machine's physical memory in MiB, 0 if unknown.
+double machine_memory_mib();
 
 }  // namespace ff::core

@@ -27,12 +27,15 @@ inline Status check_range(std::string_view path, std::string_view key, double va
   return param_error(fmt::format("{}.{} = {:.7g} is outside {}", path, key, value, format_range(lo, hi, lb, hb)));
 }
 
-/// Every component finite and within [lo, hi].
-inline Status check_vec(std::string_view path, std::string_view key, const Vec3f& v, double lo, double hi) {
-  for (int a = 0; a < 3; ++a)
-    if (!(v[a] >= lo && v[a] <= hi))
-      return param_error(fmt::format("{}.{} = [{}, {}, {}] is outside [{}, {}] in component {}", path, key, v.x(),
-                                     v.y(), v.z(), lo, hi, a));
+/// Every component finite and within [lo, hi] (with `either_sign`, its magnitude: a scale may mirror).
+inline Status check_vec(std::string_view path, std::string_view key, const Vec3f& v, double lo, double hi,
+                        bool either_sign = false) {
+  for (int a = 0; a < 3; ++a) {
+    const double c = either_sign ? std::abs(double(v[a])) : double(v[a]);
+    if (!(c >= lo && c <= hi))
+      return param_error(fmt::format("{}.{} = [{}, {}, {}] is outside {}[{}, {}] in component {}", path, key, v.x(),
+                                     v.y(), v.z(), either_sign ? "±" : "", lo, hi, a));
+  }
   return {};
 }
 

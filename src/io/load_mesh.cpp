@@ -358,8 +358,8 @@ Vec3f MeshTransform::apply(const Vec3f& p) const {
 Status MeshTransform::validate() const {
   static constexpr std::array<char, 3> kAxis{'x', 'y', 'z'};
   for (int a = 0; a < 3; ++a)
-    if (!(std::isfinite(scale[a]) && scale[a] > 0.0f))
-      return param_error(fmt::format("transform.scale.{} = {} must be finite and > 0", kAxis[a], scale[a]));
+    if (!(std::isfinite(scale[a]) && scale[a] != 0.0f))
+      return param_error(fmt::format("transform.scale.{} = {} must be finite and non-zero", kAxis[a], scale[a]));
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(rotate_deg[a]))
       return param_error(fmt::format("transform.rotate.{} = {} must be finite (degrees)", kAxis[a], rotate_deg[a]));
@@ -390,6 +390,10 @@ void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {
   const Eigen::Matrix3d rs = rotation(t.rotate_deg) * t.scale.cast<double>().asDiagonal();
   const Vec3d shift = t.translate.cast<double>();
   for (auto& v : mesh.vertices) v = (rs * v.cast<double>() + shift).cast<float>();
+  // A mirror (an odd number of negative scales, det < 0) turns every triangle inside out: reversing the winding
+  // keeps the normals pointing out, so the mesh's signed volume, and everything downstream, stays as unmirrored.
+  if (t.mirrors())
+    for (auto& tri : mesh.triangles) std::swap(tri[1], tri[2]);
 }
 
 double signed_volume(const TriangleMesh& mesh) {

@@ -19,15 +19,17 @@ inline constexpr std::size_t kMaxMeshVertices = std::size_t{kInvalidIndex} - 1; 
 /// Scale, then rotate (degrees, about x then y then z, i.e. R = Rz*Ry*Rx), then translate:
 /// p' = R * (scale ⊙ p) + translate.
 struct MeshTransform {
-  Vec3f scale{1, 1, 1};       ///< per-axis factor, each finite and > 0
+  Vec3f scale{1, 1, 1};       ///< per-axis factor, each finite and non-zero (negative: a mirror)
   Vec3f rotate_deg{0, 0, 0};  ///< degrees about x, y, z (applied in that order), each finite
   Vec3f translate{0, 0, 0};   ///< metres, each finite
 
   /// True when apply() is exactly the identity (all fields at their defaults).
   bool is_identity() const;
+  /// An odd number of negative scales: det(R·S) < 0, a mirror image.
+  bool mirrors() const { return (int(scale.x() < 0.0f) + int(scale.y() < 0.0f) + int(scale.z() < 0.0f)) % 2 == 1; }
   /// The transformed point (computed in double, stored as float).
   Vec3f apply(const Vec3f& p) const;
-  /// First invalid field as a Param error, e.g. "transform.scale.y = 0 must be finite and > 0".
+  /// First invalid field as a Param error, e.g. "transform.scale.y = 0 must be finite and non-zero".
   Status validate() const;
 };
 
@@ -53,7 +55,8 @@ struct MeshLoadStats {
 Result<TriangleMesh> load_mesh(const std::filesystem::path& path, const LoadOptions& options = {},
                                MeshLoadStats* stats = nullptr);
 
-/// Applies `t` to every vertex in place. Winding is kept: the scales are > 0, so det(R·S) > 0.
+/// Applies `t` to every vertex in place; a mirroring `t` (MeshTransform::mirrors) also reverses every triangle's
+/// winding, so outward stays outward.
 void transform_mesh(TriangleMesh& mesh, const MeshTransform& t);
 
 /// Signed enclosed volume in m³ (divergence theorem: Σ a·(b×c)/6, accumulated in double); positive for a

@@ -55,8 +55,16 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
     // sparse-sampling options remove.
     const float dc = s.sampling.spacing > 0.0f ? s.sampling.spacing : d;
     volume = 0.0;
-    for (auto& t : targets) {
+    for (std::size_t k = 0; k < targets.size(); ++k) {
+      auto& t = targets[k];
       if (!(t.volume > 0.0)) continue;
+      // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
+      // will accept before allocating it (a tiny particle_radius would otherwise exhaust the memory here).
+      if (const double rough = t.volume / (double(dc) * dc * dc); rough > 1.5 * double(s.sampling.max_samples))
+        return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
+                                       "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
+                                       "sampling.spacing",
+                                       k, dc, rough, s.sampling.max_samples));
       std::size_t kept = 0;
       for (const Vec3f& x : sampling::voxel_samples(*t.field, dc)) {
         bool dropped = false;

@@ -33,6 +33,7 @@ Status Scene::validate() const {
   for (std::size_t i = 0; i < fluid.size(); ++i) FF_CHECK(fluid[i].validate(fmt::format("fluid[{}]", i)));
   for (std::size_t i = 0; i < targets.size(); ++i) FF_CHECK(targets[i].validate(fmt::format("targets[{}]", i)));
   FF_CHECK(controller.validate());
+  FF_CHECK(limits.validate());
   if (fluid.empty() && targets.empty())
     return param_error("scene has no fluid: add a \"fluid\" list with at least one box or sphere source");
   return {};
@@ -92,8 +93,10 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   s.auto_frames = !given("output", "frames");
   s.auto_fluid = s.fluid.empty() && !s.targets.empty();
   FF_CHECK(s.validate());
-  // The resume hash covers everything that shapes the simulation; the frame count may change between runs.
+  // The resume hash covers everything that shapes the simulation; the frame count and the limits may change
+  // between runs.
   json h = j;
+  h.erase("limits");
   if (h.contains("output") && h["output"].is_object()) {
     h["output"].erase("frames");
     if (h["output"].empty()) h.erase("output");

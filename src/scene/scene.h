@@ -66,7 +66,8 @@ struct TargetSpec {
   static void fields(S& s, F&& f) {
     using namespace core;
     f("mesh", s.mesh, required(plain("the target mesh (OBJ, PLY, STL, glTF, FBX, ...), relative to the scene")));
-    f("scale", s.transform.scale, scalar_ok(closed(1e-9, 1e9, "per-axis factor, or one for all three")));
+    f("scale", s.transform.scale,
+      scalar_ok(either_sign(closed(1e-9, 1e9, "per-axis factor, or one for all three; a negative one mirrors"))));
     f("rotate", s.transform.rotate_deg, closed(-1e6, 1e6, "degrees about x, y, z (in that order)"));
     f("translate", s.transform.translate, closed(-1e9, 1e9, "m"));
     f("start", s.start, closed(0.0, 1e6, "s, when the target starts to attract fluid"));
@@ -93,6 +94,16 @@ struct OutputParams {
   Status validate(std::string_view path = "output") const { return core::validate_fields(*this, path); }
 };
 
+/// Resource limits, checked before anything is allocated (pipeline/run_budget.h).
+struct LimitsParams {
+  double max_memory_mb = 0.0;  ///< refuse a run whose memory estimate is larger, MiB; 0 = 80 % of the machine's. [0, 1e9]
+  template <class S, class F>
+  static void fields(S& s, F&& f) {
+    f("max_memory_mb", s.max_memory_mb, core::closed(0.0, 1e9, "MiB a run may need (estimated first); 0 = 80 % of the machine's"));
+  }
+  Status validate(std::string_view path = "limits") const { return core::validate_fields(*this, path); }
+};
+
 struct Scene {
   std::filesystem::path file;        ///< the scene file ("" when built in code)
   sim::SolverParams solver;
@@ -102,6 +113,7 @@ struct Scene {
   OutputParams output;
   sampling::SamplingParams sampling;  ///< how targets become control particles (spacing 0 = the fluid spacing d)
   control::ControllerSpec controller; ///< the shape controller ("adaptive" by default)
+  LimitsParams limits;                ///< resource limits (not part of the resume hash)
   bool auto_radius = true;            ///< solver.particle_radius was not given: size it from the targets
   bool auto_domain = true;            ///< domain was not given
   bool auto_frames = true;            ///< output.frames was not given: with targets, run until formed (within a cap)
@@ -119,6 +131,7 @@ struct Scene {
     f("output", s.output, plain("what the run writes"));
     f("sampling", s.sampling, plain("targets → control particles (sampling/sampling_params.h)"));
     f("controller", s.controller, plain("the shape controller (control/registry.h)"));
+    f("limits", s.limits, plain("resource limits, checked before anything is allocated"));
   }
   /// Cross-field checks (every struct's validate(), fluid present, sources in the domain).
   Status validate() const;

@@ -1,10 +1,13 @@
 // End-to-end tests of the fluidform binary: outputs, exit codes, one-line errors, no partial files,
 // thread-count independence and kill -9 + --resume.
 #include "e2e/cli_support.h"
+#include "io/load_mesh.h"
 #include "io/write_ply.h"
 #include "sampling/control_io.h"
+#include "support/shapes.h"
 #include "support/test_support.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -52,7 +55,19 @@ TEST(Cli, RunWritesFramesReportAndMetrics) {
   EXPECT_NE(rep.find("\"status\": \"ok\""), std::string::npos);
   EXPECT_NE(rep.find("\"mean_step_time_s\""), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "out" / "checkpoint" / "state.ffck"));
+  // The mesh animation of every 4th frame (0, 4, 8, 12) and the point cache, without per-frame OBJs; with
+  // --no-animation only final.obj.
+  EXPECT_TRUE(fs::exists(dir / "out" / "mesh" / "final.obj"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "animation.glb"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "particles.pc2"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "mesh" / "frame_00004.obj"));
+  EXPECT_NE(r.err.find("mesh: 4 frame(s)"), std::string::npos) << r.err;
   expect_no_temp_files(dir / "out");
+  const auto bare = run({"-q", "run", scene.string(), "-o", (dir / "bare").string(), "--no-animation"});
+  ASSERT_EQ(bare.code, 0) << bare.err;
+  EXPECT_TRUE(fs::exists(dir / "bare" / "mesh" / "final.obj"));
+  EXPECT_FALSE(fs::exists(dir / "bare" / "animation.glb"));
+  EXPECT_FALSE(fs::exists(dir / "bare" / "particles.pc2"));
 }
 
 TEST(Cli, OneAndTwoThreadsGiveBitIdenticalFrames) {
@@ -155,6 +170,11 @@ TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
        2, "fluid[0]"},
       {"too many particles", R"({"solver":{"particle_radius":0.0002},"domain":{"min":[0,0,0],"max":[2,2,2]},)" + fluid + "}",
        {"run", "{scene}", "-o", "{out}"}, 2, "more than the limit"},
+      {"tiny particles on a target",
+       "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "tetra.obj").string() + "\"}],\"solver\":{\"particle_radius\":0.0002}}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "sampling.max_samples"},
+      {"zero scale", "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "tetra.obj").string() + "\",\"scale\":[1,0,1]}]}",
+       {"run", "{scene}", "-o", "{out}"}, 2, "targets[0].scale"},
       {"unknown option", "", {"run", "x.json", "--bogus"}, 2, "bogus"},
       {"frames zero", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--frames", "0"}, 2, "frames"},
       {"no scene argument", "", {"run"}, 2, "scene"},
@@ -340,6 +360,51 @@ TEST(Cli, RunWithOnlyATargetFormsItAndReportsShapeMetrics) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("adaptive, none"), std::string::npos) << bad.err;
   EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
+}
+
+// A mirrored target (a negative scale, as artists mirror models) forms as well as the original, and sampling,
+// control, metrics and export agree on it: the samples, the fluid and the final mesh are the mirror image's.
+TEST(Cli, AMirroredBunnyFormsLikeTheOriginal) {
+  const auto dir = test::temp_dir("mirror");
+  auto bunny = test::stanford_bunny();
+  ASSERT_TRUE(bunny.has_value()) << bunny.error().message;
+  test::write_obj(dir / "bunny.obj", *bunny);
+  struct Out {
+    nlohmann::json totals;
+    io::TriangleMesh mesh;
+  };
+  auto form = [&](const char* name, const char* scale) {
+    const auto scene = write_scene(dir, fmt::format(R"({{"targets": [{{"mesh": "bunny.obj", "scale": {}}}],
+                                                    "sampling": {{"auto_count": 1500}}}})", scale), std::string(name) + ".json");
+    const auto r = run({"-q", "run", scene.string(), "-o", (dir / name).string(), "--frames", "150", "--no-animation"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    Out o;
+    o.totals = nlohmann::json::parse(read_file(dir / name / "report.json"))["totals"];
+    auto m = io::load_mesh(dir / name / "mesh" / "final.obj");
+    EXPECT_TRUE(m.has_value());
+    if (m) o.mesh = std::move(*m);
+    return o;
+  };
+  const Out plain = form("plain", "0.1"), mirrored = form("mirrored", "[-0.1, 0.1, 0.1]");
+  ASSERT_FALSE(plain.mesh.triangles.empty());
+  ASSERT_FALSE(mirrored.mesh.triangles.empty());
+  // Sampling: as many samples (the blue-noise set of the mirror image, not a copy of the original's).
+  const double n0 = plain.totals["control_particles"].get<double>(), n1 = mirrored.totals["control_particles"].get<double>();
+  EXPECT_NEAR(n1, n0, 0.03 * n0);
+  // Control and metrics: the mirrored shape forms as well (inside the mirrored mesh, not the original).
+  EXPECT_LT(mirrored.totals["error_rate_pct"].get<double>(), 1.5) << mirrored.totals.dump();
+  EXPECT_GT(mirrored.totals["inside_fraction"].get<double>(), 0.98) << mirrored.totals.dump();
+  EXPECT_LT(mirrored.totals["error_rate_pct"].get<double>(), 2.0 * plain.totals["error_rate_pct"].get<double>() + 0.2);
+  // Export: a closed mesh facing out, whose box is the original's mirrored in x.
+  EXPECT_GT(io::signed_volume(mirrored.mesh), 0.9 * io::signed_volume(plain.mesh));
+  Aabb b0, b1;
+  for (const auto& v : plain.mesh.vertices) b0.extend(v);
+  for (const auto& v : mirrored.mesh.vertices) b1.extend(v);
+  const float d = 0.1f * (b0.max - b0.min).maxCoeff();
+  EXPECT_NEAR(b1.min.x(), -b0.max.x(), d);
+  EXPECT_NEAR(b1.max.x(), -b0.min.x(), d);
+  EXPECT_NEAR(b1.min.y(), b0.min.y(), d);
+  EXPECT_NEAR(b1.max.z(), b0.max.z(), d);
 }
 
 }  // namespace

@@ -353,6 +353,28 @@ TEST(MeshTransform, LoadAppliesItToEveryVertexAndKeepsTheWinding) {
     EXPECT_TRUE(m.vertices[i].isApprox(t.apply(unit_tetra().vertices[i]), 1e-6f)) << i;
 }
 
+// Artists mirror models: a negative scale (one or three axes) is a mirror image whose triangles still face out.
+TEST(MeshTransform, MirrorsKeepTheMeshOutward) {
+  const fs::path file = test::data_dir() / "tetra.obj";
+  auto plain = load_mesh(file);
+  ASSERT_TRUE(plain.has_value());
+  const double v0 = signed_volume(*plain);
+  ASSERT_GT(v0, 0.0);
+  for (const Vec3f& s : {Vec3f(-1, 1, 1), Vec3f(1, -2, 1), Vec3f(-1, -1, -1), Vec3f(-1, -1, 1)}) {
+    SCOPED_TRACE(testing::Message() << s.transpose());
+    MeshTransform t;
+    t.scale = s;
+    t.rotate_deg = Vec3f(10, 20, 30);
+    EXPECT_EQ(t.mirrors(), s.prod() < 0.0f);
+    ASSERT_TRUE(t.validate().ok());
+    auto m = load_mesh(file, LoadOptions{.transform = t});
+    ASSERT_TRUE(m.has_value()) << m.error().message;
+    for (std::size_t i = 0; i < plain->vertices.size(); ++i)
+      EXPECT_TRUE(m->vertices[i].isApprox(t.apply(plain->vertices[i]), 1e-5f)) << i;
+    EXPECT_NEAR(signed_volume(*m), v0 * std::abs(double(s.prod())), 1e-5) << "outward: the volume stays positive";
+  }
+}
+
 TEST(MeshTransform, InvalidFieldsAreParamErrorsNamingTheField) {
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   EXPECT_TRUE(MeshTransform{}.validate().ok());
@@ -362,7 +384,7 @@ TEST(MeshTransform, InvalidFieldsAreParamErrorsNamingTheField) {
     const char* name;
   };
   const Case cases[] = {
-      {0, Vec3f(1, 0, 1), "transform.scale.y"},      {0, Vec3f(-1, 1, 1), "transform.scale.x"},
+      {0, Vec3f(1, 0, 1), "transform.scale.y"},      {0, Vec3f(1, 1, -0.0f), "transform.scale.z"},
       {0, Vec3f(1, 1, nan), "transform.scale.z"},    {0, Vec3f(inf, 1, 1), "transform.scale.x"},
       {1, Vec3f(0, nan, 0), "transform.rotate.y"},   {2, Vec3f(0, 0, -inf), "transform.translate.z"},
   };

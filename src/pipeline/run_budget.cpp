@@ -1,0 +1,54 @@
+#include "pipeline/run_budget.h"
+
+#include "core/memory.h"
+#include "sim/emitter.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ff::pipeline {
+
+nlohmann::json RunEstimate::to_json() const {
+  return {{"fluid_particles", fluid_particles},
+          {"control_samples", control_samples},
+          {"memory_mib", std::round(memory_mib)},
+          {"memory_limit_mib", std::round(limit_mib)}};
+}
+
+RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeometry>& targets) {
+  RunEstimate e;
+  const float d = scene.solver.spacing();
+  e.fluid_particles = sim::estimate_particle_count(scene.fluid, scene.domain, d);
+  const double dc = scene.sampling.spacing > 0.0f ? scene.sampling.spacing : d;
+  double samples = 0.0;
+  for (const auto& t : targets) samples += t.volume > 0.0 ? t.volume / (dc * dc * dc) : t.area / (dc * dc);
+  e.control_samples = static_cast<std::size_t>(std::min(samples, 1e18));
+  e.memory_mib = kBaseMib + (kFluidKib * double(e.fluid_particles) + kSampleKib * samples) / 1024.0;
+  // A million particles or a few GiB: minutes per frame on a laptop, worth saying before it starts.
+  e.large = e.fluid_particles + e.control_samples > 1'000'000 || e.memory_mib > 4096.0;
+  return e;
+}
+
+double memory_limit_mib(const scene::Scene& scene, std::optional<double> override_mib) {
+  if (override_mib) return *override_mib;
+  if (scene.limits.max_memory_mb > 0.0) return scene.limits.max_memory_mb;
+  const double machine = core::machine_memory_mib();
+  return machine > 0.0 ? 0.8 * machine : 16384.0;  // unknown machine: assume 20 GiB
+}
+
+Result<RunEstimate> check_run_budget(const scene::Scene& scene, const std::vector<TargetGeometry>& targets,
+                                     std::optional<double> override_mib) {
+  RunEstimate e = estimate_run(scene, targets);
+  e.limit_mib = memory_limit_mib(scene, override_mib);
+  if (e.memory_mib > e.limit_mib)
+    return param_error(fmt::format(
+        "the run would need about {:.0f} MiB ({} fluid particles, {} control samples at spacing {:g} m), more than the "
+        "limit of {:.0f} MiB; increase solver.particle_radius, shrink the fluid, or raise limits.max_memory_mb / "
+        "--max-memory",
+        e.memory_mib, e.fluid_particles, e.control_samples, scene.solver.spacing(), e.limit_mib));
+  return e;
+}
+
+}  // namespace ff::pipeline
