@@ -18,8 +18,9 @@ struct RunCli {
   fs::path scene_file;
   pipeline::RunOptions run;
   int frames = 0;
-  bool no_mesh = false;
+  bool no_mesh = false, no_animation = false;
   std::string controller;
+  double max_memory = 0.0;
 };
 
 // The one-screen summary: the paper's Table 3 columns and the numbers that keep E honest.
@@ -52,9 +53,10 @@ int run_scene_file(const fs::path& scene_file, const pipeline::RunOptions& opt) 
                sum->particles, sum->frames_written, 1e3 * sum->mean_frame_seconds, sum->peak_memory_mib,
                opt.out_dir.string());
   if (opt.mesh)
-    spdlog::info("mesh: {} frame(s) in {:.2f} s; final.obj {} triangles, {} -> {}", sum->mesh_frames, sum->mesh_seconds,
+    spdlog::info("mesh: {} frame(s) in {:.2f} s; final.obj {} triangles, {} -> {}{}", sum->mesh_frames, sum->mesh_seconds,
                  sum->mesh_triangles, sum->mesh_ok ? "watertight and manifold" : "NOT watertight/manifold",
-                 (opt.out_dir / "mesh" / "final.obj").string());
+                 (opt.out_dir / "mesh" / "final.obj").string(),
+                 sum->mesh_frames > 1 ? ", " + (opt.out_dir / "animation.glb").string() : std::string());
   if (sum->has_targets && spdlog::get_level() <= spdlog::level::info) print_summary(*sum);  // -q: no summary
   return 0;
 }
@@ -82,13 +84,19 @@ Command add_run(CLI::App& app) {
   run->add_option("-o,--out", o->run.out_dir, "output folder")->capture_default_str();
   run->add_option("--frames", o->frames, "output frames to simulate (overrides output.frames)")->check(CLI::Range(1, 10'000'000));
   run->add_flag("--resume", o->run.resume, "continue a killed run from OUT/checkpoint/");
-  run->add_flag("--no-mesh", o->no_mesh, "do not reconstruct the last frame into OUT/mesh/final.obj");
+  run->add_flag("--no-mesh", o->no_mesh, "do not reconstruct the last frame into OUT/mesh/final.obj (nor the animation)");
+  run->add_flag("--no-animation", o->no_animation,
+                "mesh only the last frame: no OUT/animation.glb and no OUT/particles.pc2 point cache");
   run->add_option("--mesh-every", o->run.mesh_every,
                   "also mesh every k-th frame: OUT/mesh/frame_NNNNN.obj, OUT/animation.glb, OUT/particles.pc2")
       ->check(CLI::Range(1, 1'000'000));
+  run->add_option("--max-memory", o->max_memory, "MiB the run may need, estimated before it starts (overrides limits.max_memory_mb)")
+      ->check(CLI::Range(1.0, 1e9));
   add_controller_option(run, o->controller, " (overrides the scene's controller.name)");
   return {run, [o] {
             o->run.mesh = !o->no_mesh;
+            o->run.animation = !o->no_animation;
+            if (o->max_memory > 0.0) o->run.max_memory_mib = o->max_memory;
             if (o->frames > 0) o->run.frames = o->frames;
             if (!o->controller.empty()) o->run.controller = o->controller;
             return run_scene_file(o->scene_file, o->run);

@@ -3,6 +3,7 @@
 #include "pipeline/mesh_export.h"
 
 #include "pipeline/auto_scene.h"
+#include "pipeline/run_budget.h"
 #include "pipeline/scene_setup.h"
 
 #include "core/memory.h"
@@ -24,6 +25,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
@@ -105,6 +107,7 @@ struct RunState {
   std::vector<TargetRow> target_rows;
   int next_frame = 1;
   double time = 0.0;
+  double first_frame_seconds = 0.0;  // the calibration: wall time of the first frame this process simulated
   sim::StageTimes stages;  // summed over the frames this process simulated (not those before a --resume)
 };
 
@@ -116,6 +119,7 @@ struct RunFacts {
   std::size_t control_count = 0;
   std::string controller;
   double rest_density = 0, particle_mass = 0;
+  RunEstimate estimate;                      // report.json "estimate"
 };
 
 /// Restores `st` from OUT/checkpoint; false when there is none to resume from.
@@ -227,6 +231,8 @@ Status write_report(const fs::path& out, const RunFacts& facts, const RunState& 
   rep["scene"] = scene::scene_to_json(facts.scene);  // every key the run used: run it again to reproduce the run
   rep["targets"] = facts.targets;
   rep["totals"] = run_totals(facts, st);
+  rep["estimate"] = facts.estimate.to_json();
+  if (st.first_frame_seconds > 0.0) rep["estimate"]["seconds_per_frame"] = st.first_frame_seconds;
   FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics::metrics_csv(st.rows)));
   if (!facts.shapes.empty())
     FF_CHECK(io::write_file_atomic(out / "metrics_targets.csv", metrics::target_metrics_csv(st.target_rows)));
@@ -267,6 +273,14 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
       spdlog::warn("frame {}: the CFL condition wanted more than solver.max_substeps = {} sub-steps", f,
                    scene.solver.max_substeps);
       warned_cap = true;
+    }
+    if (st.first_frame_seconds == 0.0) {
+      st.first_frame_seconds = seconds;
+      // From a short calibration (this frame): a run that will take long says so at once.
+      const double left = seconds * double(loop.frames - f);
+      if (left > 600.0)
+        spdlog::warn("frame {} took {:.2f} s: about {:.0f} min for the {} frames left ({} particles)", f, seconds,
+                     left / 60.0, loop.frames - f, st.particles.size());
     }
     st.time = f * frame_dt;
     FF_CHECK(write_frame(loop.out, f, st.particles, scene.output.velocity, scene.solver.spacing(), xs, vs, ts));
@@ -321,8 +335,9 @@ RunSummary run_summary(const RunFacts& facts, const RunState& st, int last_frame
   return sum;
 }
 
-/// The editable mesh of the last frame (and with --mesh-every the mesh animation and the point cache), from the
-/// particle frames just written; a failure here leaves the simulation's outputs as they are.
+/// The editable mesh of the last frame, the mesh animation and the point cache (every animation_every()-th frame,
+/// or every --mesh-every-th with its OBJs), from the particle frames just written; a failure here leaves the
+/// simulation's outputs as they are.
 Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, const RunOptions& opt, RunSummary& sum,
                 core::Progress& progress) {
   std::vector<fs::path> files;
@@ -330,8 +345,14 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   MeshOptions mo;
   mo.spacing = scene.solver.spacing();
   mo.fps = scene.output.fps;
-  if (opt.mesh_every > 0) mo.every = opt.mesh_every;
-  else mo.final_only = true;
+  if (opt.mesh_every > 0) {
+    mo.every = opt.mesh_every;
+  } else if (opt.animation) {
+    mo.every = animation_every(last_frame + 1);
+    mo.frame_objs = false;
+  } else {
+    mo.final_only = true;
+  }
   auto ms = export_meshes(files, out, mo, progress);
   if (!ms) return Error{ms.error().kind, "meshing: " + ms.error().message};
   sum.mesh_triangles = ms->final_triangles;
@@ -342,6 +363,16 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
 }
 
 }  // namespace
+
+// Both bounds of the default animation, measured on the default scene (200 frames, 10k particles; bench/RESULTS.md,
+// "The default run's animation"): 51 meshed frames took 2.4 s against 16.6 s of simulation (+15 %, under the
+// quarter the run may add) and made a 9.5 MB GLB (~0.19 MB a frame), so 60 frames stay well under 20 MB. Meshing and
+// simulating both scale with the particle count, so the share holds at other sizes.
+constexpr int kAnimationEvery = 4, kAnimationFrames = 60;
+
+int animation_every(int frames) {
+  return std::max(kAnimationEvery, (frames + kAnimationFrames - 1) / kAnimationFrames);
+}
 
 Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt, core::Progress& progress) {
   const fs::path out = opt.out_dir;
@@ -358,6 +389,12 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   if (!(frames >= 1 && frames <= 10'000'000))
     return param_error(fmt::format("--frames = {} is outside [1, 10000000]", frames));
   if (opt.frames) scene.output.frames = frames, scene.auto_frames = false;  // the report's scene is the run's
+
+  // The memory the run will need, estimated and checked before anything large is allocated.
+  FF_TRY(const RunEstimate estimate, check_run_budget(scene, geometry, opt.max_memory_mib));
+  if (estimate.large)
+    spdlog::warn("a large run: about {} fluid particles and {} control samples, ~{:.0f} MiB (limit {:.0f} MiB)",
+                 estimate.fluid_particles, estimate.control_samples, estimate.memory_mib, estimate.limit_mib);
 
   // The fluid is made (and its size checked) before the output folder is touched.
   const bool resume = opt.resume && fs::exists(checkpoint_file(out));
@@ -409,7 +446,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
                        prepared.control_count,
                        std::string(controller->name()),
                        solver.rest_density(),
-                       solver.particle_mass()};
+                       solver.particle_mass(),
+                       estimate};
   progress.begin(run_until_formed ? "forming" : "simulating", static_cast<std::size_t>(frames));
   progress.tick(static_cast<std::size_t>(st.next_frame - 1));
   const FrameLoop loop{out, facts, prepared.motions, frames, run_until_formed};

@@ -18,7 +18,14 @@ struct RunOptions {
   int max_auto_frames = 600;  ///< cap of a run that stops once the shape has formed (no --frames, no output.frames)
   bool mesh = true;           ///< reconstruct the last frame into OUT/mesh/final.obj
   int mesh_every = 0;         ///< > 0: also every k-th frame → OUT/mesh/frame_NNNNN.obj, animation.glb, particles.pc2
+  std::optional<double> max_memory_mib;  ///< --max-memory: overrides scene.limits.max_memory_mb
+  bool animation = true;      ///< with `mesh` and no mesh_every: OUT/animation.glb of every animation_every()-th
+                              ///< frame and the point cache OUT/particles.pc2 (no per-frame OBJs)
 };
+
+/// The frame step of the default animation of a run of `frames` frames: every kAnimationEvery-th frame, coarser
+/// for long runs so that at most kAnimationFrames are meshed (run.cpp says how both were measured).
+int animation_every(int frames);
 
 /// What a finished run reports to the CLI.
 struct RunSummary {

@@ -182,8 +182,13 @@ TEST(MeshAcceptance, FormedDefaultBunny) {
   const auto dir = test::temp_dir("bunnymesh");
   const auto scene = test::source_dir() / "examples" / "default_scene.json";
   ASSERT_TRUE(fs::exists(test::source_dir() / "examples" / "bunny.obj")) << "run scripts/setup (it writes examples/bunny.obj)";
-  const auto r = run({"run", scene.string(), "-o", (dir / "out").string(), "--mesh-every", "20"});
+  // The default run, as the README's first command: it leaves the forming as animation.glb and the point cache.
+  const auto r = run({"run", scene.string(), "-o", (dir / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(dir / "out" / "animation.glb"));
+  EXPECT_LE(fs::file_size(dir / "out" / "animation.glb"), 20'000'000u);
+  EXPECT_TRUE(fs::exists(dir / "out" / "particles.pc2"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "mesh" / "frame_00000.obj")) << "per-frame OBJs only with --mesh-every";
   auto target = io::load_mesh(test::source_dir() / "examples" / "bunny.obj");
   ASSERT_TRUE(target.has_value());
   for (auto& v : target->vertices) v *= 0.1f;  // the scene's scale
@@ -227,6 +232,9 @@ TEST(MeshAcceptance, FormedDefaultBunny) {
                                (dir / "out" / "animation.glb").string() + "'");
   ASSERT_EQ(rc, 0) << out;
   EXPECT_EQ(json_line(out)["errors"], 0) << out;
+  // Every 4th frame of the run and its last (pipeline::animation_every).
+  const std::size_t nf = frames.size();
+  EXPECT_EQ(json_line(out)["three"]["meshes"].get<std::size_t>(), (nf + 3) / 4 + ((nf - 1) % 4 != 0 ? 1 : 0)) << out;
 
   // Blender (Debian's package; scripts/test installs it).
   if (shell("PATH=/usr/bin:$PATH command -v blender").first != 0)
