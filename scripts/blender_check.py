@@ -35,6 +35,7 @@ def check_obj(path):
     if not meshes:
         return res
     mesh = meshes[0]
+    res["material"] = principled(mesh.active_material)
     res["vertices"] = len(mesh.data.vertices)
     res["faces"] = len(mesh.data.polygons)
     # World-space bounds (the importer turns Y-up into Blender's Z-up).
@@ -75,13 +76,26 @@ def check_obj(path):
     return res
 
 
+def principled(mat):
+    """The material's Principled BSDF inputs that make it water (None when it has none)."""
+    if mat is None or not mat.use_nodes:
+        return None
+    for node in mat.node_tree.nodes:
+        if node.type == "BSDF_PRINCIPLED":
+            return {"name": mat.name, "transmission": node.inputs["Transmission"].default_value,
+                    "ior": node.inputs["IOR"].default_value, "roughness": node.inputs["Roughness"].default_value}
+    return None
+
+
 def check_glb(path):
     reset()
     bpy.ops.import_scene.gltf(filepath=path, import_shading="SMOOTH")
+    meshes = [o for o in bpy.data.objects if o.type == "MESH"]
     return {
-        "meshes": sum(1 for o in bpy.data.objects if o.type == "MESH"),
+        "meshes": len(meshes),
         "actions": len(bpy.data.actions),
         "frame_range": [list(a.frame_range) for a in bpy.data.actions][:1],
+        "material": principled(meshes[-1].active_material) if meshes else None,
     }
 
 

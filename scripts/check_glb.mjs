@@ -1,7 +1,8 @@
 // Checks a GLB the way its users will open it: the Khronos glTF validator (npm gltf-validator) and three.js's
 // GLTFLoader (the loader of the WebXR viewer). Prints one JSON line:
 //   {"errors", "warnings", "messages": [first issues], "three": {"meshes", "nodes", "clips", "duration",
-//    "vertices_last", "box_last": [min, max] of the last frame's world-space positions}}
+//    "vertices_last", "box_last": [min, max] of the last frame's world-space positions,
+//    "material": the last frame's material as three.js made it: type, transmission, ior, thickness, attenuation}}
 // and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
 import fs from 'node:fs';
 import validator from 'gltf-validator';
@@ -50,6 +51,16 @@ try {
     visible_at_end: visible.length,
     vertices_last: last ? last.geometry.attributes.position.count : 0,
     box_last: box ? [box.min.toArray(), box.max.toArray()] : null,
+    material: last
+      ? {
+          type: last.material.type,
+          transmission: last.material.transmission ?? 0,
+          ior: last.material.ior ?? null,
+          thickness: last.material.thickness ?? 0,
+          attenuation_distance: last.material.attenuationDistance ?? null,
+          attenuation_color: last.material.attenuationColor ? last.material.attenuationColor.toArray() : null,
+        }
+      : null,
   };
 } catch (e) {
   out.three = { error: String(e && e.message ? e.message : e) };

@@ -73,7 +73,16 @@ std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh) {
   return n;
 }
 
-std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view comment) {
+std::string encode_mtl(const WaterMaterial& m) {
+  const Vec3f c = m.tint;
+  // illum 7: reflection and refraction (Fresnel); Tf 1 1 1: a clear body (Blender's OBJ importer takes the mean
+  // of Tf as the Principled BSDF's transmission, so a tinted Tf would make it half opaque); the tint is Kd.
+  return fmt::format("# fluidform water material\nnewmtl water\nKa 0 0 0\nKd {:.4f} {:.4f} {:.4f}\nKs 1 1 1\n"
+                     "Ns {:.1f}\nNi {:.3f}\nd 1\nTf 1 1 1\nillum 7\n",
+                     c.x(), c.y(), c.z(), 1000.0f * (1.0f - m.roughness), m.ior);
+}
+
+std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view comment, std::string_view mtllib) {
   std::string s;
   s.reserve(mesh.vertices.size() * (normals ? 64 : 32) + mesh.triangles.size() * 40);
   for (std::size_t a = 0, b; a <= comment.size(); a = b + 1) {
@@ -86,6 +95,7 @@ std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view 
   for (const auto& v : mesh.vertices) s += fmt::format("v {:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
   if (normals)
     for (const auto& n : vertex_normals(mesh)) s += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", n.x(), n.y(), n.z());
+  if (!mtllib.empty()) s += fmt::format("mtllib {}\nusemtl water\n", mtllib);
   for (const auto& t : mesh.triangles) {
     if (normals)
       s += fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
@@ -95,12 +105,13 @@ std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view 
   return s;
 }
 
-Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals, std::string_view comment) {
+Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals, std::string_view comment,
+                 std::string_view mtllib) {
   for (const auto& t : mesh.triangles)
     for (Index v : t)
       if (v >= mesh.vertices.size())
         return input_error(fmt::format("{}: triangle refers to vertex {} of {}", path.string(), v, mesh.vertices.size()));
-  return write_file_atomic(path, encode_obj(mesh, normals, comment));
+  return write_file_atomic(path, encode_obj(mesh, normals, comment, mtllib));
 }
 
 Status GlbOptions::validate(std::size_t frames) const {
@@ -238,6 +249,26 @@ Result<std::vector<std::uint8_t>> pack_glb(const json& doc, const std::vector<st
 
 }  // namespace
 
+namespace {
+
+// The water material (KHR_materials_transmission, _ior, _volume; a closed mesh, so the volume extension's
+// "thickness" is the mesh's own). Base colour white: the tint comes from absorption along the path through the
+// liquid, deeper where it is thicker, as in real water.
+json water_material(const WaterMaterial& w, const Aabb& box) {
+  const Vec3f ext = box.max - box.min;
+  const float size = ext.allFinite() && ext.minCoeff() >= 0.0f && ext.norm() > 0.0f ? ext.norm() : 1.0f;
+  const float distance = w.attenuation_distance > 0.0f ? w.attenuation_distance : 0.5f * size;
+  return {{"name", "water"},
+          {"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", w.roughness}}},
+          {"extensions",
+           {{"KHR_materials_transmission", {{"transmissionFactor", 1.0}}},
+            {"KHR_materials_ior", {{"ior", w.ior}}},
+            {"KHR_materials_volume",
+             {{"thicknessFactor", 0.25f * size}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
+}
+
+}  // namespace
+
 Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& o) {
   FF_CHECK(o.validate(frames.size()));
   if (frames.empty()) return param_error("glb: no frames to write");
@@ -245,6 +276,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
   json nodes = json::array(), meshes = json::array();
   json root = {{"name", "fluidform"}, {"children", json::array()}};
   nodes.push_back(root);
+  Aabb last_box;  // of the last frame with a surface: sizes the material's absorption
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const TriangleMesh& m = frames[k];
     FF_CHECK(check_glb_frame(m, k));
@@ -258,6 +290,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
     const std::vector<Vec3f> normals = vertex_normals(m);
     Aabb box;
     for (const auto& v : m.vertices) box.extend(v);
+    last_box = box;
     json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
     const json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
                                        : float_attributes(b, m, normals, box);
@@ -281,17 +314,15 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"scene", 0},
               {"scenes", {{{"name", "fluidform"}, {"nodes", {0}}}}},
               {"nodes", nodes},
-              {"materials", {{{"name", "fluid"},
-                              {"pbrMetallicRoughness", {{"baseColorFactor", {o.color.x(), o.color.y(), o.color.z(), 1.0}},
-                                                        {"metallicFactor", 0.0},
-                                                        {"roughnessFactor", 0.25}}}}}},
+              {"materials", {water_material(o.material, last_box)}},
               {"buffers", {{{"byteLength", b.bin.size()}}}},
               {"bufferViews", b.views},
               {"accessors", b.accessors}};
   if (!meshes.empty()) doc["meshes"] = meshes;
   if (!animation.is_null()) doc["animations"] = json::array({animation});
+  doc["extensionsUsed"] = {"KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"};
   if (o.quantize && !meshes.empty()) {
-    doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+    doc["extensionsUsed"].push_back("KHR_mesh_quantization");
     doc["extensionsRequired"] = {"KHR_mesh_quantization"};
   }
   return pack_glb(doc, b.bin);

@@ -21,16 +21,32 @@ namespace ff::io {
 /// Per-vertex unit normals, area-weighted over the incident triangles (a vertex of no triangle gets +Y).
 std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh);
 
-/// OBJ text: `v` lines, then `vn` (vertex normals, same indexing) when `normals`, then `f a//a b//b c//c`.
-std::string encode_obj(const TriangleMesh& mesh, bool normals = true, std::string_view comment = "fluidform mesh");
+/// The water look of exported meshes: a clear, refracting liquid whose colour comes from absorption inside it.
+/// glTF: KHR_materials_transmission + _ior + _volume (three.js MeshPhysicalMaterial, Blender's Principled BSDF);
+/// OBJ: an MTL with the same figures (Ni, d, Tf, illum 7).
+struct WaterMaterial {
+  Vec3f tint{0.16f, 0.48f, 0.85f};  ///< linear RGB the liquid absorbs towards (attenuationColor, MTL Kd/Tf)
+  float ior = 1.33f;                ///< water
+  float roughness = 0.05f;
+  float attenuation_distance = 0.0f;  ///< m travelled inside before light takes the tint; 0: half the last
+                                      ///< frame's box diagonal (the tint then looks the same at any model size)
+};
+
+/// MTL text of one material named "water".
+std::string encode_mtl(const WaterMaterial& material);
+
+/// OBJ text: `v` lines, then `vn` (vertex normals, same indexing) when `normals`, then `f a//a b//b c//c`; with
+/// `mtllib` (a file name beside the OBJ), `mtllib` + `usemtl water` before the faces.
+std::string encode_obj(const TriangleMesh& mesh, bool normals = true, std::string_view comment = "fluidform mesh",
+                       std::string_view mtllib = {});
 Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals = true,
-                 std::string_view comment = "fluidform mesh");
+                 std::string_view comment = "fluidform mesh", std::string_view mtllib = {});
 
 struct GlbOptions {
   double fps = 60.0;        ///< frames per second of the animation, > 0
   bool quantize = true;     ///< KHR_mesh_quantization: 16-bit positions, 8-bit normals (about half the size)
   std::vector<double> times;  ///< optional time (s) of each frame; empty: frame k at k / fps
-  Vec3f color{0.16f, 0.48f, 0.85f};  ///< base colour of the fluid material (linear RGB)
+  WaterMaterial material;   ///< the meshes' material
 
   Status validate(std::size_t frames) const;
 };

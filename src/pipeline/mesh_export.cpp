@@ -24,6 +24,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kMtlName = "water.mtl";  // beside the OBJs in OUT/mesh
+
 // "spacing D" in a particle PLY's header comments (written by `run`), or 0.
 float spacing_from_comments(const io::ParticleFrame& f) {
   for (const auto& c : f.comments) {
@@ -136,7 +138,9 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
       if (o.frame_objs && !o.final_only) {
         const long k = io::frame_number(file);
         const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
-        if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string())); !st.ok())
+        if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string()),
+                                    kMtlName);
+            !st.ok())
           failed[c] = 1, errors[c] = st.error();
       }
     }
@@ -190,6 +194,8 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   sum.frames_read = frames.size();
   FF_CHECK(io::ensure_writable_dir(out));
   FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+  // The water material every OBJ names (Blender's OBJ importer reads it into a Principled BSDF).
+  FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
 
   const std::vector<std::size_t> chosen = chosen_frames(frames.size(), o);
   auto last = io::read_particles_ply(frames.back());
@@ -213,7 +219,8 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     spdlog::warn("mesh: the last frame made no surface (too few particles close together); final.obj is empty");
   FF_CHECK(io::write_obj(out / "mesh" / "final.obj", fin, true,
                          fmt::format("fluidform editable mesh of {}\nspacing {:.6g} m; {}", frames.back().filename().string(), d,
-                                     check.summary())));
+                                     check.summary()),
+                         kMtlName));
 
   if (o.glb && !o.final_only) {
     io::GlbOptions g;

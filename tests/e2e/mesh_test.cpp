@@ -233,6 +233,12 @@ TEST(MeshAcceptance, FormedDefaultBunny) {
   ASSERT_EQ(rc, 0) << out;
   EXPECT_EQ(json_line(out)["errors"], 0) << out;
   // Every 4th frame of the run and its last (pipeline::animation_every).
+  // The water material, as three.js makes it (MeshPhysicalMaterial with transmission and absorption).
+  const auto mat = json_line(out)["three"]["material"];
+  EXPECT_EQ(mat["type"], "MeshPhysicalMaterial") << out;
+  EXPECT_EQ(mat["transmission"], 1.0) << out;
+  EXPECT_NEAR(mat["ior"].get<double>(), 1.33, 1e-3) << out;
+  EXPECT_GT(mat["attenuation_distance"].get<double>(), 0.0) << out;
   const std::size_t nf = frames.size();
   EXPECT_EQ(json_line(out)["three"]["meshes"].get<std::size_t>(), (nf + 3) / 4 + ((nf - 1) % 4 != 0 ? 1 : 0)) << out;
 
@@ -256,6 +262,14 @@ TEST(MeshAcceptance, FormedDefaultBunny) {
   EXPECT_EQ(b["obj"]["unweighted_vertices"], 0) << bout;
   EXPECT_GT(b["glb"]["meshes"].get<int>(), 1) << bout;
   EXPECT_EQ(b["glb"]["actions"], b["glb"]["meshes"]) << bout;
+  // Blender reads the water material from both files: a transmissive Principled BSDF with water's IOR.
+  for (const char* f : {"glb", "obj"}) {
+    SCOPED_TRACE(f);
+    const auto& m = b[f]["material"];
+    ASSERT_TRUE(m.is_object()) << bout;
+    EXPECT_GT(m["transmission"].get<double>(), 0.9) << bout;
+    EXPECT_NEAR(m["ior"].get<double>(), 1.33, 1e-2) << bout;
+  }
   EXPECT_LT(b["pc2"]["max_difference_last_frame"].get<double>(), 1e-5) << bout;
   EXPECT_EQ(b["pc2"]["points"], last->positions.size()) << bout;
 }

@@ -5,6 +5,8 @@
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
@@ -100,6 +102,45 @@ TEST(WriteGlb, LayoutNodesAndStepAnimation) {
     EXPECT_NEAR(acc[in]["max"][0].get<double>(), 4.0 / 60.0, 1e-6);
     EXPECT_EQ(j.contains("extensionsRequired"), quantize);
   }
+}
+
+// The water material: glTF transmission, IOR and volume (absorption sized to the mesh), and the same in the MTL
+// that the OBJ names.
+TEST(WriteGlb, WaterMaterialWithTransmissionIorAndVolume) {
+  GlbOptions o;
+  o.material.tint = Vec3f(0.2f, 0.5f, 0.9f);
+  const auto f = frames();
+  auto bytes = encode_glb(f, o);
+  ASSERT_TRUE(bytes.has_value());
+  const auto j = glb_json(*bytes);
+  ASSERT_EQ(j["materials"].size(), 1u);
+  const auto& m = j["materials"][0];
+  EXPECT_EQ(m["extensions"]["KHR_materials_transmission"]["transmissionFactor"], 1.0);
+  EXPECT_NEAR(m["extensions"]["KHR_materials_ior"]["ior"].get<double>(), 1.33, 1e-6);
+  const auto& vol = m["extensions"]["KHR_materials_volume"];
+  EXPECT_NEAR(vol["attenuationColor"][2].get<double>(), 0.9, 1e-6);
+  EXPECT_GT(vol["attenuationDistance"].get<double>(), 0.0);
+  EXPECT_GT(vol["thicknessFactor"].get<double>(), 0.0);
+  for (const char* ext : {"KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"})
+    EXPECT_NE(std::find(j["extensionsUsed"].begin(), j["extensionsUsed"].end(), ext), j["extensionsUsed"].end()) << ext;
+  // A fixed distance is kept as given.
+  o.material.attenuation_distance = 0.125f;
+  auto bytes2 = encode_glb(f, o);
+  ASSERT_TRUE(bytes2.has_value());
+  const auto j2 = glb_json(*bytes2);
+  EXPECT_NEAR(j2["materials"][0]["extensions"]["KHR_materials_volume"]["attenuationDistance"].get<double>(), 0.125, 1e-6);
+
+  const std::string mtl = encode_mtl(o.material);
+  EXPECT_NE(mtl.find("newmtl water\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("Ni 1.330\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("Kd 0.2000 0.5000 0.9000\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("Tf 1 1 1\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("illum 7\n"), std::string::npos) << mtl;
+  const std::string obj = encode_obj(f[0], true, "c", "water.mtl");
+  const auto at = obj.find("mtllib water.mtl\nusemtl water\n");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_LT(at, obj.find("\nf ")) << "before the faces";
+  EXPECT_EQ(encode_obj(f[0]).find("mtllib"), std::string::npos);
 }
 
 TEST(WriteGlb, QuantizedPositionsDecodeWithinAHalfStep) {
