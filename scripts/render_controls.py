@@ -3,7 +3,7 @@
 
     /usr/bin/python3 scripts/render_controls.py CONTROLS.ply OUT.png [--property phi|weight|density]
 
-Needs numpy and matplotlib (Debian: python3-matplotlib). Only for looking at results; not used by tests.
+Needs numpy and matplotlib (Debian: python3-matplotlib; scripts/setup installs it). Only for looking at results; not used by tests.
 """
 import argparse
 import sys

@@ -4,7 +4,7 @@
     /usr/bin/python3 scripts/render_frame.py OUT/particles/frame_NNNNN.ply OUT.png [--controls OUT/cache/controls_*.ply]
 
 Fluid particles are coloured by target id (free fluid grey), control samples drawn faintly behind them.
-Needs numpy and matplotlib (Debian: python3-matplotlib). Only for looking at results; not used by tests.
+Needs numpy and matplotlib (Debian: python3-matplotlib; scripts/setup installs it). Only for looking at results; not used by tests.
 """
 import argparse
 import glob
