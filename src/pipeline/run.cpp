@@ -99,6 +99,7 @@ bool formed_and_held(const std::vector<FrameRow>& rows, int window, int min_fram
 namespace {
 
 fs::path checkpoint_file(const fs::path& out) { return out / "checkpoint" / "state.ffck"; }
+fs::path previous_checkpoint_file(const fs::path& out) { return out / "checkpoint" / "state.prev.ffck"; }
 
 /// What a run carries from frame to frame; a checkpoint restores it.
 struct RunState {
@@ -122,21 +123,36 @@ struct RunFacts {
   RunEstimate estimate;                      // report.json "estimate"
 };
 
-/// Restores `st` from OUT/checkpoint; false when there is none to resume from.
+/// The checkpoint at `file`, decoded.
+Result<sim::Checkpoint> load_checkpoint(const fs::path& file) {
+  FF_TRY(auto bytes, read_bytes(file));
+  auto ck = sim::decode_checkpoint(bytes);
+  if (!ck) return input_error(fmt::format("{}: {}", file.string(), ck.error().message));
+  return std::move(*ck);
+}
+
+/// Restores `st` from OUT/checkpoint; false when there is none to resume from. A newest checkpoint that cannot be
+/// read (truncated, corrupt, or gone because the run was killed between keeping the old one and writing the new
+/// one) falls back to the one before, with a warning.
 Result<bool> resume_from_checkpoint(const fs::path& out, std::uint64_t scene_hash, RunState& st) {
-  const fs::path ckpt_file = checkpoint_file(out);
-  if (!fs::exists(ckpt_file)) {
+  const fs::path ckpt_file = checkpoint_file(out), prev_file = previous_checkpoint_file(out);
+  if (!fs::exists(ckpt_file) && !fs::exists(prev_file)) {
     spdlog::warn("--resume: no checkpoint in {}, starting from the beginning", ckpt_file.parent_path().string());
     return false;
   }
   if (const auto n = io::remove_stale_temp_files(out))
     spdlog::info("removed {} partial file(s) left by the interrupted run", n);
-  FF_TRY(auto bytes, read_bytes(ckpt_file));
-  auto ck = sim::decode_checkpoint(bytes);
-  if (!ck) return input_error(fmt::format("{}: {}", ckpt_file.string(), ck.error().message));
+  fs::path used = ckpt_file;
+  auto ck = fs::exists(ckpt_file) ? load_checkpoint(ckpt_file)
+                                  : Result<sim::Checkpoint>(input_error(fmt::format("{}: missing", ckpt_file.string())));
+  if (!ck && fs::exists(prev_file)) {
+    spdlog::warn("--resume: {}; resuming from the checkpoint before it", ck.error().message);
+    ck = load_checkpoint(used = prev_file);
+  }
+  if (!ck) return ck.error();
   if (ck->scene_hash != scene_hash)
     return input_error(fmt::format("{}: the checkpoint was made from a different scene; run without --resume to start over",
-                                   ckpt_file.string()));
+                                   used.string()));
   st.particles = std::move(ck->particles);
   st.next_frame = static_cast<int>(ck->next_frame);
   st.time = ck->time;
@@ -145,6 +161,18 @@ Result<bool> resume_from_checkpoint(const fs::path& out, std::uint64_t scene_has
   if (!extra.is_discarded() && extra.contains("target_rows")) st.target_rows = metrics::target_rows_from_json(extra["target_rows"]);
   spdlog::info("resuming from frame {} (t = {:.4f} s, {} particles)", st.next_frame, st.time, st.particles.size());
   return true;
+}
+
+/// Writes a checkpoint, keeping the one before it as state.prev.ffck (a rename, so at every instant one of the two
+/// is a whole checkpoint).
+Status write_checkpoint(const fs::path& out, const sim::Checkpoint& ck) {
+  const fs::path file = checkpoint_file(out);
+  std::error_code ec;
+  if (fs::exists(file)) {
+    fs::rename(file, previous_checkpoint_file(out), ec);
+    if (ec) return io_error(fmt::format("{}: cannot keep the previous checkpoint: {}", file.string(), ec.message()));
+  }
+  return io::write_file_atomic(file, sim::encode_checkpoint(ck));
 }
 
 /// The shape totals of report.json (METHOD §d): steady error rate, time to form, tail means, and per target.
@@ -299,7 +327,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
       sim::Checkpoint ck{f + 1, st.time, scene.hash,
                          json{{"rows", metrics::rows_to_json(st.rows)}, {"target_rows", metrics::target_rows_to_json(st.target_rows)}}.dump(),
                          st.particles};
-      FF_CHECK(io::write_file_atomic(checkpoint_file(loop.out), sim::encode_checkpoint(ck)));
+      FF_CHECK(write_checkpoint(loop.out, ck));
       FF_CHECK(write_report(loop.out, loop.facts, st, "running", ""));
     }
     if (!progress.tick(static_cast<std::size_t>(f))) return Error{Error::Kind::Cancelled, "cancelled"};
@@ -397,7 +425,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
                  estimate.fluid_particles, estimate.control_samples, estimate.memory_mib, estimate.limit_mib);
 
   // The fluid is made (and its size checked) before the output folder is touched.
-  const bool resume = opt.resume && fs::exists(checkpoint_file(out));
+  const bool resume = opt.resume && (fs::exists(checkpoint_file(out)) || fs::exists(previous_checkpoint_file(out)));
   sim::ParticleSet initial;
   if (!resume) {
     FF_CHECK(sim::fill_sources(scene.fluid, scene.domain, scene.solver.particle_radius, initial));

@@ -123,6 +123,36 @@ TEST(Cli, KillNineThenResumeGivesTheSameFinalFrame) {
   expect_no_temp_files(out);
 }
 
+// Checkpoints keep the one before: a truncated newest checkpoint (a disk that filled, a copy cut short) resumes
+// from the previous one, with a warning, and the run still ends identical to an uninterrupted one.
+TEST(Cli, ACorruptNewestCheckpointResumesFromThePreviousOne) {
+  const auto dir = test::temp_dir("resume-prev");
+  const auto scene = write_scene(dir, kSmallScene);  // 12 frames, a checkpoint every 4
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", (dir / "full").string(), "--no-mesh"}).code, 0);
+  const fs::path out = dir / "o", ck = out / "checkpoint" / "state.ffck", prev = out / "checkpoint" / "state.prev.ffck";
+  ASSERT_EQ(run({"-q", "run", scene.string(), "-o", out.string(), "--frames", "8", "--no-mesh"}).code, 0);
+  ASSERT_TRUE(fs::exists(ck));
+  ASSERT_TRUE(fs::exists(prev)) << "the frame-4 checkpoint is kept beside the frame-8 one";
+  fs::resize_file(ck, fs::file_size(ck) / 2);
+  const auto r = run({"run", scene.string(), "-o", out.string(), "--resume", "--no-mesh"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("resuming from the checkpoint before it"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("resuming from frame 5"), std::string::npos) << r.err;
+  EXPECT_TRUE(read_file(dir / "full" / "particles" / "frame_00012.ply") == read_file(out / "particles" / "frame_00012.ply"));
+  EXPECT_EQ(count_lines(read_file(out / "metrics.csv")), 14u);
+  // Both gone (killed between keeping the old one and writing the new one): the previous one alone is enough.
+  fs::remove(ck);
+  const auto r2 = run({"-q", "run", scene.string(), "-o", out.string(), "--resume", "--no-mesh"});
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  // Neither readable: one line naming the file, exit 2.
+  fs::resize_file(ck, fs::file_size(ck) / 3);
+  fs::resize_file(prev, fs::file_size(prev) / 3);
+  const auto bad = run({"-q", "run", scene.string(), "-o", out.string(), "--resume", "--no-mesh"});
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("state.prev.ffck"), std::string::npos) << bad.err;
+  expect_no_temp_files(out);
+}
+
 TEST(Cli, ResumeRefusesAChangedScene) {
   const auto dir = test::temp_dir("resume2");
   const auto scene = write_scene(dir, kSmallScene);
