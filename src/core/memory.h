@@ -6,7 +6,8 @@ namespace ff::core {
 double peak_rss_mib();
 /// Current resident set size in MiB (Linux VmRSS), 0 if unknown.
 double current_rss_mib();
-/// The machine's physical memory in MiB, 0 if unknown.
+/// The memory this process may use in MiB: the machine's physical memory, or the cgroup's limit (a container)
+/// when that is lower; 0 if unknown.
 double machine_memory_mib();
 
 }  // namespace ff::core

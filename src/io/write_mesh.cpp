@@ -254,17 +254,20 @@ namespace {
 // The water material (KHR_materials_transmission, _ior, _volume; a closed mesh, so the volume extension's
 // "thickness" is the mesh's own). Base colour white: the tint comes from absorption along the path through the
 // liquid, deeper where it is thicker, as in real water.
-json water_material(const WaterMaterial& w, const Aabb& box) {
+// thicknessFactor is in the mesh's own coordinates, attenuationDistance in the world's: a quantized mesh lives in
+// [-1, 1]³ under a node scaled by its half-extent, so its thickness is a quarter of that cube's diagonal.
+json water_material(const WaterMaterial& w, const Aabb& box, bool quantized) {
   const Vec3f ext = box.max - box.min;
   const float size = ext.allFinite() && ext.minCoeff() >= 0.0f && ext.norm() > 0.0f ? ext.norm() : 1.0f;
   const float distance = w.attenuation_distance > 0.0f ? w.attenuation_distance : 0.5f * size;
+  const float thickness = 0.25f * (quantized ? 2.0f * std::sqrt(3.0f) : size);
   return {{"name", "water"},
           {"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", w.roughness}}},
           {"extensions",
            {{"KHR_materials_transmission", {{"transmissionFactor", 1.0}}},
             {"KHR_materials_ior", {{"ior", w.ior}}},
             {"KHR_materials_volume",
-             {{"thicknessFactor", 0.25f * size}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
+             {{"thicknessFactor", thickness}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
 }
 
 }  // namespace
@@ -314,7 +317,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"scene", 0},
               {"scenes", {{{"name", "fluidform"}, {"nodes", {0}}}}},
               {"nodes", nodes},
-              {"materials", {water_material(o.material, last_box)}},
+              {"materials", {water_material(o.material, last_box, o.quantize)}},
               {"buffers", {{{"byteLength", b.bin.size()}}}},
               {"bufferViews", b.views},
               {"accessors", b.accessors}};

@@ -25,7 +25,7 @@ std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh);
 /// glTF: KHR_materials_transmission + _ior + _volume (three.js MeshPhysicalMaterial, Blender's Principled BSDF);
 /// OBJ: an MTL with the same figures (Ni, d, Tf, illum 7).
 struct WaterMaterial {
-  Vec3f tint{0.16f, 0.48f, 0.85f};  ///< linear RGB the liquid absorbs towards (attenuationColor, MTL Kd/Tf)
+  Vec3f tint{0.16f, 0.48f, 0.85f};  ///< linear RGB the liquid absorbs towards (glTF attenuationColor, MTL Kd)
   float ior = 1.33f;                ///< water
   float roughness = 0.05f;
   float attenuation_distance = 0.0f;  ///< m travelled inside before light takes the tint; 0: half the last

@@ -148,6 +148,9 @@ Result<bool> resume_from_checkpoint(const fs::path& out, std::uint64_t scene_has
   if (!ck && fs::exists(prev_file)) {
     spdlog::warn("--resume: {}; resuming from the checkpoint before it", ck.error().message);
     ck = load_checkpoint(used = prev_file);
+    // The unreadable newest one goes, so the next checkpoint does not rename it over the good one.
+    std::error_code ec;
+    if (ck) fs::remove(ckpt_file, ec);
   }
   if (!ck) return ck.error();
   if (ck->scene_hash != scene_hash)
@@ -307,8 +310,8 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
       // From a short calibration (this frame): a run that will take long says so at once.
       const double left = seconds * double(loop.frames - f);
       if (left > 600.0)
-        spdlog::warn("frame {} took {:.2f} s: about {:.0f} min for the {} frames left ({} particles)", f, seconds,
-                     left / 60.0, loop.frames - f, st.particles.size());
+        spdlog::warn("frame {} took {:.2f} s: {} {:.0f} min for the {} frames left ({} particles)", f, seconds,
+                     loop.run_until_formed ? "up to" : "about", left / 60.0, loop.frames - f, st.particles.size());
     }
     st.time = f * frame_dt;
     FF_CHECK(write_frame(loop.out, f, st.particles, scene.output.velocity, scene.solver.spacing(), xs, vs, ts));
@@ -434,6 +437,11 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
 
   // Inputs are all checked before the output folder is touched.
   FF_CHECK(io::ensure_writable_dir(out));
+  if (!resume) {  // a fresh run: an earlier run's checkpoints must not become this one's previous checkpoint
+    std::error_code ec;
+    fs::remove(checkpoint_file(out), ec);
+    fs::remove(previous_checkpoint_file(out), ec);
+  }
   FF_CHECK(io::ensure_writable_dir(out / "particles"));
   if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(out / "checkpoint"));
 

@@ -24,7 +24,8 @@ struct RunOptions {
 };
 
 /// The frame step of the default animation of a run of `frames` frames: every kAnimationEvery-th frame, coarser
-/// for long runs so that at most kAnimationFrames are meshed (run.cpp says how both were measured).
+/// for long runs so that at most kAnimationFrames are meshed, plus the last frame when the step misses it (run.cpp
+/// says how both were measured). `frames` counts the particle frames, frame 0 included.
 int animation_every(int frames);
 
 /// What a finished run reports to the CLI.

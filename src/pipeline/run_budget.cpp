@@ -35,7 +35,7 @@ double memory_limit_mib(const scene::Scene& scene, std::optional<double> overrid
   if (override_mib) return *override_mib;
   if (scene.limits.max_memory_mb > 0.0) return scene.limits.max_memory_mb;
   const double machine = core::machine_memory_mib();
-  return machine > 0.0 ? 0.8 * machine : 16384.0;  // unknown machine: assume 20 GiB
+  return machine > 0.0 ? 0.8 * machine : 16384.0;  // unknown machine: 80 % of 20 GiB
 }
 
 Result<RunEstimate> check_run_budget(const scene::Scene& scene, const std::vector<TargetGeometry>& targets,

@@ -4,6 +4,7 @@
 #include "e2e/cli_support.h"
 #include "io/load_mesh.h"
 #include "io/write_ply.h"
+#include "pipeline/run.h"
 #include "sampling/mesh_field.h"
 #include "support/test_support.h"
 #include "surface/mesh_check.h"
@@ -232,15 +233,15 @@ TEST(MeshAcceptance, FormedDefaultBunny) {
                                (dir / "out" / "animation.glb").string() + "'");
   ASSERT_EQ(rc, 0) << out;
   EXPECT_EQ(json_line(out)["errors"], 0) << out;
-  // Every 4th frame of the run and its last (pipeline::animation_every).
   // The water material, as three.js makes it (MeshPhysicalMaterial with transmission and absorption).
   const auto mat = json_line(out)["three"]["material"];
   EXPECT_EQ(mat["type"], "MeshPhysicalMaterial") << out;
   EXPECT_EQ(mat["transmission"], 1.0) << out;
   EXPECT_NEAR(mat["ior"].get<double>(), 1.33, 1e-3) << out;
   EXPECT_GT(mat["attenuation_distance"].get<double>(), 0.0) << out;
-  const std::size_t nf = frames.size();
-  EXPECT_EQ(json_line(out)["three"]["meshes"].get<std::size_t>(), (nf + 3) / 4 + ((nf - 1) % 4 != 0 ? 1 : 0)) << out;
+  // Every k-th frame of the run and its last (pipeline::animation_every).
+  const std::size_t nf = frames.size(), k = static_cast<std::size_t>(pipeline::animation_every(static_cast<int>(nf)));
+  EXPECT_EQ(json_line(out)["three"]["meshes"].get<std::size_t>(), (nf + k - 1) / k + ((nf - 1) % k != 0 ? 1 : 0)) << out;
 
   // Blender (Debian's package; scripts/test installs it).
   if (shell("PATH=/usr/bin:$PATH command -v blender").first != 0)
