@@ -60,7 +60,8 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
       if (!(t.volume > 0.0)) continue;
       // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
       // will accept before allocating it (a tiny particle_radius would otherwise exhaust the memory here).
-      if (const double rough = t.volume / (double(dc) * dc * dc); rough > 1.5 * double(s.sampling.max_samples))
+      if (const double rough = sampling::estimate_sample_count(true, t.volume, t.area, dc);
+          rough > 1.5 * double(s.sampling.max_samples))
         return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
                                        "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
                                        "sampling.spacing",

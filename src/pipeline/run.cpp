@@ -100,6 +100,9 @@ namespace {
 
 fs::path checkpoint_file(const fs::path& out) { return out / "checkpoint" / "state.ffck"; }
 fs::path previous_checkpoint_file(const fs::path& out) { return out / "checkpoint" / "state.prev.ffck"; }
+bool has_checkpoint(const fs::path& out) {
+  return fs::exists(checkpoint_file(out)) || fs::exists(previous_checkpoint_file(out));
+}
 
 /// What a run carries from frame to frame; a checkpoint restores it.
 struct RunState {
@@ -136,7 +139,7 @@ Result<sim::Checkpoint> load_checkpoint(const fs::path& file) {
 /// one) falls back to the one before, with a warning.
 Result<bool> resume_from_checkpoint(const fs::path& out, std::uint64_t scene_hash, RunState& st) {
   const fs::path ckpt_file = checkpoint_file(out), prev_file = previous_checkpoint_file(out);
-  if (!fs::exists(ckpt_file) && !fs::exists(prev_file)) {
+  if (!has_checkpoint(out)) {
     spdlog::warn("--resume: no checkpoint in {}, starting from the beginning", ckpt_file.parent_path().string());
     return false;
   }
@@ -428,7 +431,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
                  estimate.fluid_particles, estimate.control_samples, estimate.memory_mib, estimate.limit_mib);
 
   // The fluid is made (and its size checked) before the output folder is touched.
-  const bool resume = opt.resume && (fs::exists(checkpoint_file(out)) || fs::exists(previous_checkpoint_file(out)));
+  const bool resume = opt.resume && has_checkpoint(out);
   sim::ParticleSet initial;
   if (!resume) {
     FF_CHECK(sim::fill_sources(scene.fluid, scene.domain, scene.solver.particle_radius, initial));

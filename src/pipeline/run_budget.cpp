@@ -1,6 +1,7 @@
 #include "pipeline/run_budget.h"
 
 #include "core/memory.h"
+#include "sampling/samplers.h"
 #include "sim/emitter.h"
 
 #include <fmt/format.h>
@@ -21,9 +22,9 @@ RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeom
   RunEstimate e;
   const float d = scene.solver.spacing();
   e.fluid_particles = sim::estimate_particle_count(scene.fluid, scene.domain, d);
-  const double dc = scene.sampling.spacing > 0.0f ? scene.sampling.spacing : d;
+  const float dc = scene.sampling.spacing > 0.0f ? scene.sampling.spacing : d;
   double samples = 0.0;
-  for (const auto& t : targets) samples += t.volume > 0.0 ? t.volume / (dc * dc * dc) : t.area / (dc * dc);
+  for (const auto& t : targets) samples += sampling::estimate_sample_count(t.volume > 0.0, t.volume, t.area, dc);
   e.control_samples = static_cast<std::size_t>(std::min(samples, 1e18));
   e.memory_mib = kBaseMib + (kFluidKib * double(e.fluid_particles) + kSampleKib * samples) / 1024.0;
   // A million particles or a few GiB: minutes per frame on a laptop, worth saying before it starts.

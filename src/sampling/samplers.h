@@ -48,6 +48,10 @@ double enclosed_volume(const SdfGrid& sdf);
 /// The spacing `auto_count` samples would have in this field (volume, or the surface of an open sheet).
 float automatic_spacing(const MeshField& field, std::size_t auto_count);
 
+/// Samples a target makes at spacing d: V/d³ when sampled as a solid, else a hexagonal packing of its area.
+/// sample_target refuses more than 1.5 × max_samples by this count before it builds any grid.
+double estimate_sample_count(bool solid, double volume, double area, float d);
+
 // The stages, exposed for tests and benchmarks.
 std::vector<Vec3f> voxel_samples(const MeshField& field, float spacing);
 std::vector<Vec3f> random_interior_points(const SdfGrid& sdf, const Aabb& box, std::size_t count, std::uint64_t seed);
