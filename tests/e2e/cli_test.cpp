@@ -207,6 +207,8 @@ TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
        {"run", "{scene}", "-o", "{out}"}, 2, "sampling.max_samples"},
       {"zero scale", "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "tetra.obj").string() + "\",\"scale\":[1,0,1]}]}",
        {"run", "{scene}", "-o", "{out}"}, 2, "targets[0].scale"},
+      {"over the memory budget", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--max-memory", "1"}, 2,
+       "more than the limit of 1 MiB"},
       {"unknown option", "", {"run", "x.json", "--bogus"}, 2, "bogus"},
       {"frames zero", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--frames", "0"}, 2, "frames"},
       {"no scene argument", "", {"run"}, 2, "scene"},
