@@ -9,6 +9,9 @@
 #        and reports meshes and actions.
 # --points/--pc2: imports the frame-0 point mesh, plays the cache with the Mesh Cache modifier and reports the
 #        largest difference between the evaluated points and the cache's last frame.
+# --vdb: imports a `--vdb` level set as a volume object (turned upright: fluidform's files are Y-up like Houdini, the
+#        object's 90° about x puts them in Blender's Z-up as the OBJ and glTF importers do), reports its grids, and
+#        meshes it with the Volume to Mesh modifier at the zero level: faces and world bounds.
 import json
 import struct
 import sys
@@ -132,7 +135,44 @@ def check_pc2(points, cache):
             "max_difference_last_frame": worst}
 
 
+def check_vdb(path):
+    reset()
+    bpy.ops.object.volume_import(filepath=path, align="WORLD", location=(0, 0, 0))
+    vol = bpy.context.object
+    if vol is None or vol.type != "VOLUME":
+        return {"objects": 0}
+    vol.rotation_euler = (1.5707963267948966, 0.0, 0.0)
+    grids = vol.data.grids
+    loaded = grids.load()
+    res = {"objects": 1, "loaded": bool(loaded), "grids": [g.name for g in grids],
+           "types": [g.data_type for g in grids], "error": grids.error_message or None}
+    if not res["error"]:
+        res.pop("error")
+    # The level set back to a mesh in Blender: an empty mesh object with Volume to Mesh at the zero crossing.
+    me = bpy.data.meshes.new("vdb_mesh")
+    obj = bpy.data.objects.new("vdb_mesh", me)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.rotation_euler = vol.rotation_euler
+    mod = obj.modifiers.new("to_mesh", "VOLUME_TO_MESH")
+    mod.object = vol
+    mod.grid_name = grids[0].name if len(grids) else ""
+    mod.threshold = 0.0
+    mod.resolution_mode = "GRID"
+    bpy.context.view_layer.update()
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev_obj = obj.evaluated_get(dg)
+    ev = ev_obj.to_mesh()
+    res["faces"] = len(ev.polygons)
+    if len(ev.vertices):
+        co = [ev_obj.matrix_world @ v.co for v in ev.vertices]
+        res["bounds"] = [[min(c[a] for c in co) for a in range(3)], [max(c[a] for c in co) for a in range(3)]]
+    ev_obj.to_mesh_clear()
+    return res
+
+
 try:
+    if "vdb" in opt:
+        out["vdb"] = check_vdb(opt["vdb"])
     if "obj" in opt:
         out["obj"] = check_obj(opt["obj"])
     if "glb" in opt:

@@ -53,6 +53,7 @@ Command add_mesh(CLI::App& app) {
   mesh->add_option("-o,--out", o->out, "output folder (mesh/, animation.glb, particles.pc2)")->required();
   mesh->add_option("--every", o->mesh.every, "mesh every k-th frame (and the last)")->capture_default_str();
   mesh->add_flag("--final-only", o->final_only, "mesh only the last frame (mesh/final.obj)");
+  mesh->add_flag("--vdb", o->mesh.vdb, "also write each meshed frame's level set: OUT/vdb/frame_NNNNN.vdb (OpenVDB)");
   mesh->add_option("--spacing", o->mesh.spacing, "particle spacing d in metres (default: from the frames' header, or estimated)");
   mesh->add_option("--triangles", o->mesh.params.max_triangles, "triangle budget per mesh (0: none)")->capture_default_str();
   mesh->add_option("--cell", o->mesh.params.cell_size, "grid cell size in spacings")->capture_default_str();

@@ -90,6 +90,7 @@ Command add_run(CLI::App& app) {
   run->add_option("--mesh-every", o->run.mesh_every,
                   "also mesh every k-th frame: OUT/mesh/frame_NNNNN.obj, OUT/animation.glb, OUT/particles.pc2")
       ->check(CLI::Range(1, 1'000'000));
+  run->add_flag("--vdb", o->run.vdb, "also write each meshed frame's level set: OUT/vdb/frame_NNNNN.vdb (OpenVDB)");
   run->add_option("--max-memory", o->max_memory, "MiB the run may need, estimated before it starts (overrides limits.max_memory_mb)")
       ->check(CLI::Range(1.0, 1e9));
   add_controller_option(run, o->controller, " (overrides the scene's controller.name)");

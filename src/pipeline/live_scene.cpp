@@ -78,13 +78,14 @@ Result<LiveFrame> LiveScene::step() {
   LiveFrame f;
   f.step_seconds = watch.seconds();
   ++frame_;
-  time_ += frame_dt;
+  time_ = frame_ * frame_dt;  // as `run` counts time (no drift of a sum), so a stepped scene matches a run's frames
   f.frame = frame_;
   f.time = time_;
   f.substeps = stats.substeps;
   const ShapeMeasure m = measure_targets(shapes_, motions_, time_, particles_, scene_.solver.particle_radius, scratch_);
   f.controlled = m.controlled;
   f.error_rate = m.error_rate;
+  f.inside = m.inside, f.splash = m.splash, f.e_fwd_all = m.e_fwd_all;
   return f;
 }
 

@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ff::pipeline {
@@ -35,6 +36,8 @@ struct LiveFrame {
   int substeps = 0;
   std::size_t controlled = 0;
   double error_rate = NAN;    ///< %, N_c-weighted over the targets, each against its current (steered) pose; NaN: none
+  double inside = NAN, splash = NAN;  ///< fractions of the targets' fluid, N_c-weighted (metrics::FrameMetrics)
+  double e_fwd_all = NAN;             ///< m, E_fwd over all of the targets' fluid
 };
 
 /// A target's pose as the viewer edits it: about the target's pivot (its rest bounding-box centre).
@@ -69,6 +72,13 @@ class LiveScene {
   Status set_mesh(std::size_t t, std::size_t mesh, core::Progress& progress);
 
   const sim::ParticleSet& particles() const { return particles_; }
+  /// Hands over the particles' arrays as they are and keeps an equal copy to step on: whoever holds views of
+  /// particles()' buffers (the Python module's zero-copy arrays) keeps valid, unchanging data after the next step.
+  sim::ParticleSet detach_particles() {
+    sim::ParticleSet out = particles_;
+    std::swap(out, particles_);
+    return out;
+  }
   const std::vector<LiveTarget>& targets() const { return targets_; }
   /// The scene's meshes: every target's and every mesh swap's, once each, then LiveOptions::extra_meshes.
   const std::vector<std::filesystem::path>& meshes() const { return meshes_; }

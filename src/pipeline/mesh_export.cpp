@@ -7,6 +7,7 @@
 #include "io/atomic_file.h"
 #include "io/write_mesh.h"
 #include "io/write_ply.h"
+#include "io/write_vdb.h"
 #include "surface/mesh_check.h"
 #include "surface/reconstruct.h"
 
@@ -135,8 +136,19 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
       errors[c] = Error{mesh.error().kind, fmt::format("{}: {}", file.string(), mesh.error().message)};
     } else {
       meshes[c] = std::move(*mesh);
+      const long k = io::frame_number(file);
+      if (o.vdb) {
+        // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.
+        io::VdbOptions v;
+        v.voxel_size = o.params.cell_size * d;
+        const fs::path p = out / "vdb" / fmt::format("frame_{:05d}.vdb", k >= 0 ? k : static_cast<long>(chosen[c]));
+        if (meshes[c].triangles.empty()) {
+          // No surface (spray only): no grid; the frame's number is simply missing from OUT/vdb.
+        } else if (auto st = io::write_level_set_vdb(p, meshes[c], v); !st.ok()) {
+          failed[c] = 1, errors[c] = st.error();
+        }
+      }
       if (o.frame_objs && !o.final_only) {
-        const long k = io::frame_number(file);
         const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
         if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string()),
                                     kMtlName);
@@ -194,6 +206,10 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   sum.frames_read = frames.size();
   FF_CHECK(io::ensure_writable_dir(out));
   FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+  if (o.vdb) {
+    if (!io::vdb_available()) return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
+    FF_CHECK(io::ensure_writable_dir(out / "vdb"));
+  }
   // The water material every OBJ names (Blender's OBJ importer reads it into a Principled BSDF).
   FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
 

@@ -8,6 +8,8 @@
 //   OUT/animation.glb          the meshed frames as one glTF 2.0 mesh animation (io/write_mesh.h)
 //   OUT/particles.pc2          every particle frame as a Blender point cache, played by the Mesh Cache modifier
 //   OUT/particles_frame0.ply   on this point mesh (the first frame's particles)
+//   OUT/vdb/frame_NNNNN.vdb    with `vdb`: each meshed frame's level set (OpenVDB, grid "surface"), for Blender's
+//                              volume objects and Houdini
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/types.h"
@@ -28,6 +30,7 @@ struct MeshOptions {
   bool glb = true;          ///< write animation.glb
   bool pc2 = true;          ///< write particles.pc2 and particles_frame0.ply
   bool quantize = true;     ///< KHR_mesh_quantization in the GLB
+  bool vdb = false;         ///< write OUT/vdb/frame_NNNNN.vdb for every meshed frame (voxel = the surface cell)
   double fps = 60.0;        ///< frame rate of the animation and the cache
 
   Status validate() const;

@@ -379,6 +379,7 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   MeshOptions mo;
   mo.spacing = scene.solver.spacing();
   mo.fps = scene.output.fps;
+  mo.vdb = opt.vdb;
   if (opt.mesh_every > 0) {
     mo.every = opt.mesh_every;
   } else if (opt.animation) {

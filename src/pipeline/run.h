@@ -21,6 +21,7 @@ struct RunOptions {
   std::optional<double> max_memory_mib;  ///< --max-memory: overrides scene.limits.max_memory_mb
   bool animation = true;      ///< with `mesh` and no mesh_every: OUT/animation.glb of every animation_every()-th
                               ///< frame and the point cache OUT/particles.pc2 (no per-frame OBJs)
+  bool vdb = false;           ///< with `mesh`: each meshed frame's level set as OUT/vdb/frame_NNNNN.vdb (OpenVDB)
 };
 
 /// The frame step of the default animation of a run of `frames` frames: every kAnimationEvery-th frame, coarser

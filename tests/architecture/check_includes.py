@@ -22,6 +22,7 @@ ALLOWED = {
     "pipeline": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene"},
     "server": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline"},
     "app": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline", "server"},
+    "python": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([a-z_]+)/[^"]+"')
 
