@@ -71,7 +71,7 @@ Status LiveScene::rebuild_controller() {
 
 std::string LiveScene::controller_name() const { return std::string(controller_->name()); }
 
-Result<LiveFrame> LiveScene::step() {
+Result<LiveFrame> LiveScene::step(bool measure) {
   const double frame_dt = 1.0 / scene_.output.fps;
   core::Stopwatch watch;
   FF_TRY(auto stats, solver_->advance(particles_, time_, frame_dt, *controller_));
@@ -82,6 +82,7 @@ Result<LiveFrame> LiveScene::step() {
   f.frame = frame_;
   f.time = time_;
   f.substeps = stats.substeps;
+  if (!measure) return f;
   const ShapeMeasure m = measure_targets(shapes_, motions_, time_, particles_, scene_.solver.particle_radius, scratch_);
   f.controlled = m.controlled;
   f.error_rate = m.error_rate;

@@ -59,8 +59,9 @@ class LiveScene {
   static Result<std::unique_ptr<LiveScene>> create(const scene::Scene& scene, const LiveOptions& options,
                                                    core::Progress& progress);
 
-  /// Advances one frame of 1/fps s. Errors: the solver's (a non-finite particle).
-  Result<LiveFrame> step();
+  /// Advances one frame of 1/fps s; with `measure`, the frame's shape metrics too (else they stay NaN). Errors: the
+  /// solver's (a non-finite particle).
+  Result<LiveFrame> step(bool measure = true);
   /// The fluid back to its initial state at t = 0, the controller rebuilt (poses and meshes kept).
   Status restart();
   /// Switches the controller (a registry name), keeping the fluid where it is.

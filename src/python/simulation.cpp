@@ -40,7 +40,7 @@ class Simulation {
     live_ = unwrap(std::move(live));
   }
 
-  py::dict step(int frames) {
+  py::dict step(int frames, bool metrics) {
     if (frames < 1) raise(param_error(fmt::format("step: frames = {} must be ≥ 1", frames)));
     std::unique_lock lock(busy_, std::try_to_lock);
     if (!lock) throw std::runtime_error("Simulation.step: another thread is stepping this simulation");
@@ -52,7 +52,7 @@ class Simulation {
     {
       py::gil_scoped_release nogil;
       for (int i = 0; i < frames && st.ok(); ++i) {
-        auto r = live_->step();
+        auto r = live_->step(metrics && i + 1 == frames);  // the metrics of the frame returned only
         if (!r) st = r.error();
         else {
           f = *r;
@@ -183,8 +183,9 @@ order, the order of the run's particle frames.)")
            py::arg("progress") = py::none(),
            "scene: a scene file path or a dict of scene keys; controller overrides the scene's; cache_dir holds the "
            "control-sample cache (default fluidform-out/cache, as a run's); progress: callback(what, done, total).")
-      .def("step", &Simulation::step, py::arg("frames") = 1,
-           "Advances `frames` frames of 1/fps s; returns the last frame's metrics and the wall time of the steps.")
+      .def("step", &Simulation::step, py::arg("frames") = 1, py::kw_only(), py::arg("metrics") = true,
+           "Advances `frames` frames of 1/fps s; returns the last frame's shape metrics (measured on the last frame "
+           "only; metrics=False skips them, NaN) and the solver's wall time of the steps (step_seconds).")
       .def("restart", &Simulation::restart, "Back to t = 0 with a fresh solver and controller.")
       .def("set_pose", &Simulation::set_pose, py::arg("target"), py::kw_only(),
            py::arg("translate") = py::make_tuple(0, 0, 0), py::arg("rotate") = py::make_tuple(0, 0, 0),
