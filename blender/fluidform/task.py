@@ -102,6 +102,7 @@ class FormTask:
                 argv += ["--frames", str(self.frames)]
             self.argv = argv
             self.run = job.Run(argv, os.path.join(self.input_dir, "fluidform.log"))
+            self.timings = {"export": time.monotonic() - self.started}  # s: export, run (the CLI), import
             self.run.start()
         except BaseException:
             shutil.rmtree(self.out_dir, ignore_errors=True)
@@ -134,6 +135,8 @@ class FormTask:
             self._fail(self.run.failure())
             return True
         self.state = "IMPORTING"
+        imported = time.monotonic()
+        self.timings["run"] = imported - self.run.started
         try:
             self.collection = result.import_run(context, self.out_dir, self.name, self.start_frame, self.fps)
         except Exception as e:  # the import removed what it had made
@@ -146,6 +149,7 @@ class FormTask:
             # Every frame is in particles.pc2, which the Mesh Cache modifier reads.
             shutil.rmtree(os.path.join(self.out_dir, "particles"), ignore_errors=True)
         self.finished = time.monotonic()
+        self.timings["import"] = self.finished - imported
         self.state = "DONE"
         frames = self.collection.get("fluidform_frames", 0)
         self.message = (f"Formed: frames {self.start_frame}–{self.start_frame + frames - 1} "
