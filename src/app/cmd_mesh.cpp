@@ -7,6 +7,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <nlohmann/json.hpp>
+
+#include <fstream>
 #include <memory>
 
 namespace ff::app {
@@ -30,6 +33,17 @@ int run_mesh(MeshCli& o) {
   if (auto st = o.mesh.validate(); !st.ok()) return fail(st.error());
   auto frames = io::particle_frames(o.input);
   if (!frames) return fail(frames.error());
+  // A run's output folder: its targets' water tints from the run's report (one material per target in the GLB).
+  if (std::error_code ec; fs::is_regular_file(o.input / "report.json", ec)) {
+    std::ifstream in(o.input / "report.json");
+    const auto report = nlohmann::json::parse(in, nullptr, false);
+    if (!report.is_discarded() && report.contains("scene") && report["scene"].contains("targets"))
+      for (const auto& t : report["scene"]["targets"]) {
+        const auto tint = t.value("tint", nlohmann::json());
+        if (tint.is_array() && tint.size() == 3 && tint[0].is_number() && tint[1].is_number() && tint[2].is_number())
+          o.mesh.target_tints.emplace_back(tint[0].get<float>(), tint[1].get<float>(), tint[2].get<float>());
+      }
+  }
   spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());
   ProgressBar bar(stderr);
   auto sum = pipeline::export_meshes(*frames, o.out, o.mesh, bar);

@@ -123,6 +123,12 @@ Status GlbOptions::validate(std::size_t frames) const {
       if (!std::isfinite(times[k]) || (k && !(times[k] > times[k - 1])))
         return param_error("glb: frame times must be finite and increasing");
   }
+  if (!triangle_material.empty()) {
+    if (materials.empty()) return param_error("glb: triangle materials without materials");
+    if (materials.size() > 256) return param_error(fmt::format("glb: {} materials, at most 256", materials.size()));
+    if (triangle_material.size() != frames)
+      return param_error(fmt::format("glb: triangle materials for {} frames, not {}", triangle_material.size(), frames));
+  }
   return {};
 }
 
@@ -256,18 +262,26 @@ namespace {
 // liquid, deeper where it is thicker, as in real water.
 // thicknessFactor is in the mesh's own coordinates, attenuationDistance in the world's: a quantized mesh lives in
 // [-1, 1]³ under a node scaled by its half-extent, so its thickness is a quarter of that cube's diagonal.
-json water_material(const WaterMaterial& w, const Aabb& box, bool quantized) {
+json water_material(const WaterMaterial& w, const Aabb& box, bool quantized, const std::string& name = "water") {
   const Vec3f ext = box.max - box.min;
   const float size = ext.allFinite() && ext.minCoeff() >= 0.0f && ext.norm() > 0.0f ? ext.norm() : 1.0f;
   const float distance = w.attenuation_distance > 0.0f ? w.attenuation_distance : 0.5f * size;
   const float thickness = 0.25f * (quantized ? 2.0f * std::sqrt(3.0f) : size);
-  return {{"name", "water"},
+  return {{"name", name},
           {"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", w.roughness}}},
           {"extensions",
            {{"KHR_materials_transmission", {{"transmissionFactor", 1.0}}},
             {"KHR_materials_ior", {{"ior", w.ior}}},
             {"KHR_materials_volume",
              {{"thicknessFactor", thickness}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
+}
+
+json glb_materials(const GlbOptions& o, const Aabb& box) {
+  if (o.materials.empty()) return json::array({water_material(o.material, box, o.quantize)});
+  json all = json::array();
+  for (std::size_t k = 0; k < o.materials.size(); ++k)
+    all.push_back(water_material(o.materials[k], box, o.quantize, fmt::format("water_{}", k)));
+  return all;
 }
 
 }  // namespace
@@ -297,9 +311,28 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
     json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
     const json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
                                        : float_attributes(b, m, normals, box);
-    const int indices = index_accessor(b, m);
-    meshes.push_back({{"name", fmt::format("frame_{:05d}", k)},
-                      {"primitives", {{{"attributes", attributes}, {"indices", indices}, {"material", 0}, {"mode", 4}}}}});
+    json primitives = json::array();
+    if (o.triangle_material.empty()) {
+      primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, m)}, {"material", 0}, {"mode", 4}});
+    } else {
+      // One primitive per material present, sharing the frame's vertices.
+      const auto& mat = o.triangle_material[k];
+      if (mat.size() != m.triangles.size())
+        return param_error(fmt::format("glb: frame {}: {} triangle materials for {} triangles", k, mat.size(),
+                                       m.triangles.size()));
+      for (std::size_t id = 0; id < o.materials.size(); ++id) {
+        TriangleMesh part;
+        part.vertices = m.vertices;  // index_accessor's index width depends on the vertex count only
+        for (std::size_t t = 0; t < mat.size(); ++t)
+          if (mat[t] == id) part.triangles.push_back(m.triangles[t]);
+        if (part.triangles.empty()) continue;
+        primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, part)}, {"material", id}, {"mode", 4}});
+      }
+      for (std::uint8_t id : mat)
+        if (id >= o.materials.size())
+          return param_error(fmt::format("glb: frame {}: material {} of {}", k, int(id), o.materials.size()));
+    }
+    meshes.push_back({{"name", fmt::format("frame_{:05d}", k)}, {"primitives", primitives}});
     if (mesh_node.is_null()) {
       nodes[static_cast<std::size_t>(node_index)]["mesh"] = meshes.size() - 1;
     } else {
@@ -317,7 +350,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"scene", 0},
               {"scenes", {{{"name", "fluidform"}, {"nodes", {0}}}}},
               {"nodes", nodes},
-              {"materials", {water_material(o.material, last_box, o.quantize)}},
+              {"materials", glb_materials(o, last_box)},
               {"buffers", {{{"byteLength", b.bin.size()}}}},
               {"bufferViews", b.views},
               {"accessors", b.accessors}};

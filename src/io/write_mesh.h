@@ -46,7 +46,11 @@ struct GlbOptions {
   double fps = 60.0;        ///< frames per second of the animation, > 0
   bool quantize = true;     ///< KHR_mesh_quantization: 16-bit positions, 8-bit normals (about half the size)
   std::vector<double> times;  ///< optional time (s) of each frame; empty: frame k at k / fps
-  WaterMaterial material;   ///< the meshes' material
+  WaterMaterial material;   ///< the meshes' material (when `materials` is empty)
+  /// Several targets: one material each (material k tinted as target k), and per frame the material of each
+  /// triangle; a frame's triangles are then one primitive per material. Empty: every triangle is `material`.
+  std::vector<WaterMaterial> materials;
+  std::vector<std::vector<std::uint8_t>> triangle_material;  ///< [frame][triangle] index into `materials`
 
   Status validate(std::size_t frames) const;
 };

@@ -114,10 +114,38 @@ Result<float> frame_spacing(const io::ParticleFrame& last, const fs::path& file,
 
 // Reconstructs the chosen frames (and writes their OBJs), several at once, one thread each: reconstruct() is
 // deterministic for any thread count, so the meshes do not depend on how frames are spread.
+// Per triangle, the target of the particle nearest to its centre (within 2d; farther, or free fluid: the target of
+// the nearest targeted particle within that range, else 0), for per-target materials.
+std::vector<std::uint8_t> triangle_targets(const io::TriangleMesh& m, const io::ParticleFrame& f, float d,
+                                           std::size_t targets) {
+  std::vector<std::uint8_t> out(m.triangles.size(), 0);
+  if (f.targets.size() != f.positions.size() || m.triangles.empty()) return out;
+  std::vector<Vec3f> centres(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    centres[t] = (m.vertices[m.triangles[t][0]] + m.vertices[m.triangles[t][1]] + m.vertices[m.triangles[t][2]]) / 3.0f;
+  const float r = 2.0f * d;
+  core::NeighborGrid grid(r);
+  grid.build(f.positions);
+  core::NeighborList nl;
+  grid.query(f.positions, centres, r, nl);
+  for (std::size_t t = 0; t < centres.size(); ++t) {
+    float best = INFINITY;
+    for (Index j : nl.of(t)) {
+      if (f.targets[j] >= targets) continue;  // free fluid (255) has no tint of its own
+      const float d2 = (f.positions[j] - centres[t]).squaredNorm();
+      if (d2 < best) best = d2, out[t] = f.targets[j];
+    }
+  }
+  return out;
+}
+
 Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::path> frames, std::span<const std::size_t> chosen,
                                                          const fs::path& out, float d, const MeshOptions& o,
-                                                         surface::SurfaceStats& last_stats, core::Progress& progress) {
+                                                         surface::SurfaceStats& last_stats,
+                                                         std::vector<std::vector<std::uint8_t>>& labels,
+                                                         core::Progress& progress) {
   std::vector<io::TriangleMesh> meshes(chosen.size());
+  if (o.target_tints.size() > 1) labels.assign(chosen.size(), {});
   std::vector<Error> errors(chosen.size());
   std::vector<char> failed(chosen.size(), 0);
   std::vector<surface::SurfaceStats> stats(chosen.size());
@@ -136,6 +164,7 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
       errors[c] = Error{mesh.error().kind, fmt::format("{}: {}", file.string(), mesh.error().message)};
     } else {
       meshes[c] = std::move(*mesh);
+      if (o.target_tints.size() > 1) labels[c] = triangle_targets(meshes[c], *f, d, o.target_tints.size());
       const long k = io::frame_number(file);
       if (o.vdb) {
         // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.
@@ -220,7 +249,9 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   sum.spacing = d;
 
   surface::SurfaceStats last_stats;
-  FF_TRY(const std::vector<io::TriangleMesh> meshes, reconstruct_frames(frames, chosen, out, d, o, last_stats, progress));
+  std::vector<std::vector<std::uint8_t>> labels;
+  FF_TRY(const std::vector<io::TriangleMesh> meshes,
+         reconstruct_frames(frames, chosen, out, d, o, last_stats, labels, progress));
   sum.frames_meshed = chosen.size();
 
   const io::TriangleMesh& fin = meshes.back();
@@ -242,6 +273,15 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     io::GlbOptions g;
     g.fps = o.fps;
     g.quantize = o.quantize;
+    if (o.target_tints.size() == 1) g.material.tint = o.target_tints[0];
+    if (o.target_tints.size() > 1) {
+      for (const Vec3f& tint : o.target_tints) {
+        io::WaterMaterial w;
+        w.tint = tint;
+        g.materials.push_back(w);
+      }
+      g.triangle_material = labels;
+    }
     for (std::size_t c : chosen) {
       const long k = io::frame_number(frames[c]);
       g.times.push_back(double(k >= 0 ? k : static_cast<long>(c)) / o.fps);

@@ -31,6 +31,9 @@ struct MeshOptions {
   bool pc2 = true;          ///< write particles.pc2 and particles_frame0.ply
   bool quantize = true;     ///< KHR_mesh_quantization in the GLB
   bool vdb = false;         ///< write OUT/vdb/frame_NNNNN.vdb for every meshed frame (voxel = the surface cell)
+  /// The water tint of each target (scene targets[].tint). One: the GLB's material takes it. Several: one material
+  /// per target, each triangle of a frame getting the material of the target of the particle nearest to it.
+  std::vector<Vec3f> target_tints;
   double fps = 60.0;        ///< frame rate of the animation and the cache
 
   Status validate() const;

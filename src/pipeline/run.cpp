@@ -380,6 +380,7 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   mo.spacing = scene.solver.spacing();
   mo.fps = scene.output.fps;
   mo.vdb = opt.vdb;
+  for (const auto& t : scene.targets) mo.target_tints.push_back(t.tint);
   if (opt.mesh_every > 0) {
     mo.every = opt.mesh_every;
   } else if (opt.animation) {

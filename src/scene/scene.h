@@ -49,6 +49,8 @@ struct TargetSpec {
   /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
   std::vector<control::Keyframe> keyframes;
   Interpolation interpolation = Interpolation::Linear;  ///< between keyframes: linear, or smoothstep ("smooth")
+  /// Linear RGB this target's liquid absorbs towards in the exported GLB (its water material's attenuationColor).
+  Vec3f tint{0.16f, 0.48f, 0.85f};
   /// Mesh swaps, "morph": [{"time": T, "mesh": PATH}, ...]: from T on the target is that mesh (same transform).
   struct Swap {
     double time = 0.0;
@@ -74,6 +76,7 @@ struct TargetSpec {
     f("keyframes", s.keyframes, plain("keyframed motion about the target's centre"));
     f("interpolation", s.interpolation, plain("between keyframes"));
     f("morph", s.swaps, plain("mesh swaps: from each time on the target is that mesh"));
+    f("tint", s.tint, closed(0.0, 1.0, "linear RGB its liquid absorbs towards in the GLB's water material"));
   }
   Status validate(std::string_view path) const;
 };

@@ -11,6 +11,10 @@
 #include "surface/reconstruct.h"
 
 #include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #ifdef FF_HAVE_OPENVDB
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
@@ -165,6 +169,56 @@ TEST(MeshCommand, FramesGiveWatertightObjsAValidGlbAndAPointCache) {
   ASSERT_EQ(e.code, 0) << e.err;
   EXPECT_NE(e.err.find("estimated"), std::string::npos) << e.err;
   EXPECT_NE(e.err.find("0.05 m"), std::string::npos) << e.err;
+}
+
+// Two targets' fluid (target ids 0 and 1) meshed from a run's folder: the GLB gets one water material per target,
+// tinted as the report's targets[].tint, and each triangle the material of the target whose fluid it bounds.
+TEST(MeshCommand, TwoTargetsGetTheirOwnTintInTheGlb) {
+  const auto dir = test::temp_dir("tint");
+  const float d = 0.05f;
+  fs::create_directories(dir / "particles");
+  auto a = ball(d, 0.25f, Vec3f(-0.5f, 0.5f, 0.0f)), b = ball(d, 0.25f, Vec3f(0.5f, 0.5f, 0.0f));
+  std::vector<Vec3f> x = a;
+  x.insert(x.end(), b.begin(), b.end());
+  std::vector<std::uint8_t> ids(a.size(), 0);
+  ids.resize(x.size(), 1);
+  for (int k = 0; k < 2; ++k) {
+    io::ParticleFrameView v;
+    v.positions = x;
+    v.targets = ids;
+    v.comment = "fluidform particles\nspacing 0.05";
+    ASSERT_TRUE(io::write_particles_ply(dir / "particles" / (k ? "frame_00001.ply" : "frame_00000.ply"), v).ok());
+  }
+  {
+    std::ofstream r(dir / "report.json");
+    r << R"({"scene": {"targets": [{"mesh": "a.obj", "tint": [0.9, 0.1, 0.1]}, {"mesh": "b.obj", "tint": [0.1, 0.8, 0.2]}]}})";
+  }
+  const auto r = run({"mesh", dir.string(), "-o", (dir / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  // The GLB's JSON chunk: two materials with the tints, and in each frame one primitive per ball.
+  std::ifstream in(dir / "out" / "animation.glb", std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 20u);
+  std::uint32_t json_len = 0;
+  std::memcpy(&json_len, bytes.data() + 12, 4);
+  const auto doc = nlohmann::json::parse(std::string(bytes.data() + 20, json_len));
+  ASSERT_EQ(doc["materials"].size(), 2u);
+  EXPECT_EQ(doc["materials"][0]["extensions"]["KHR_materials_volume"]["attenuationColor"][0].get<double>(), 0.9f);
+  EXPECT_EQ(doc["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationColor"][1].get<double>(), 0.8f);
+  ASSERT_EQ(doc["meshes"].size(), 2u);
+  for (const auto& m : doc["meshes"]) {
+    ASSERT_EQ(m["primitives"].size(), 2u) << m.dump();
+    EXPECT_EQ(m["primitives"][0]["material"], 0);
+    EXPECT_EQ(m["primitives"][1]["material"], 1);
+    // The two balls have the same size: each primitive holds half the triangles (within a few).
+    const auto n0 = doc["accessors"][m["primitives"][0]["indices"].get<int>()]["count"].get<double>();
+    const auto n1 = doc["accessors"][m["primitives"][1]["indices"].get<int>()]["count"].get<double>();
+    EXPECT_NEAR(n0 / n1, 1.0, 0.05);
+  }
+  const auto [rc, out] = shell("node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
+                               (dir / "out" / "animation.glb").string() + "'");
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_EQ(json_line(out)["errors"], 0) << out;
 }
 
 TEST(MeshCommand, BadInputIsOneLineAndWritesNoMesh) {
