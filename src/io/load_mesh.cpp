@@ -1,6 +1,7 @@
-// Mesh import through Assimp (DESIGN.md "io/"). The import runs in two phases on one Importer:
-//   1. ReadFile without post-processing, then our checks on the raw scene: some vertices, all finite, some
-//      faces. Non-finite positions must be refused before post-processing, because SpatialSort (used by
+// Mesh import through Assimp (DESIGN.md "io/"), from a file or (load_mesh_from_memory) from bytes in memory. The
+// import runs in two phases on one Importer:
+//   1. ReadFile (ReadFileFromMemory) without post-processing, then our checks on the raw scene: some vertices, all
+//      finite, some faces. Non-finite positions must be refused before post-processing, because SpatialSort (used by
 //      JoinIdenticalVertices) std::sorts positions and NaN keys make that undefined behaviour.
 //   2. ApplyPostProcessing: validate, triangulate, keep positions only, weld identical positions, bake node
 //      transforms (merging the meshes), split by primitive type.
@@ -152,13 +153,8 @@ bool is_off_keyword(std::string_view t) {
 /// data: invalid/OutOfMemory.off declares 353535235358 vertices and makes Assimp touch 16 GB for 30 s; a PLY
 /// header with "element vertex 300000000" grows without bound as well. Every element takes at least one byte
 /// of the file, so a declared count above the file size is refused here, before Assimp sees the file.
-Status check_declared_counts(const fs::path& path, std::uintmax_t file_size) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {};  // Assimp reports the open failure
-  std::string head(static_cast<std::size_t>(std::min(file_size, kHeaderBytes)), '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  const std::string_view h = head;
+/// `h`: the first kHeaderBytes of the file (or all of it).
+Status check_declared_counts(const fs::path& path, std::string_view h, std::uintmax_t file_size) {
   auto too_many = [&](std::uint64_t n, std::string_view what) {
     return file_error(path,
                       fmt::format("header declares {} {}, more than a {}-byte file can hold", n, what, file_size));
@@ -195,6 +191,15 @@ Status check_declared_counts(const fs::path& path, std::uintmax_t file_size) {
   if (const auto n = parse_count(t); n && *n > file_size) return too_many(*n, "vertices");
   if (const auto n = parse_count(next_token(h, i)); n && *n > file_size) return too_many(*n, "faces");
   return {};
+}
+
+Status check_declared_counts(const fs::path& path, std::uintmax_t file_size) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};  // Assimp reports the open failure
+  std::string head(static_cast<std::size_t>(std::min(file_size, kHeaderBytes)), '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return check_declared_counts(path, head, file_size);
 }
 
 // ---- scene → TriangleMesh ----
@@ -293,30 +298,25 @@ std::size_t drop_degenerate(TriangleMesh& mesh) {
   return dropped;
 }
 
-Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& options, MeshLoadStats& stats) {
+Status check_options(const fs::path& path, const LoadOptions& options) {
   if (auto s = options.transform.validate(); !s.ok())
     return param_error(fmt::format("{}: {}", shown(path), s.error().message));
   if (!(options.max_vertices >= 1 && options.max_vertices <= kMaxMeshVertices))
     return param_error(fmt::format("{}: max_vertices = {} is outside [1, {}]", shown(path), options.max_vertices,
                                    kMaxMeshVertices));
+  return {};
+}
 
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (st.type() == fs::file_type::not_found) return file_error(path, "no such file");
-  if (ec) return file_error(path, one_line(ec.message()));
-  if (st.type() == fs::file_type::directory) return file_error(path, "is a directory, not a mesh file");
-  if (st.type() != fs::file_type::regular) return file_error(path, "is not a regular file");
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (!ec && size == 0) return file_error(path, "file is empty");
-  if (!ec) FF_CHECK(check_declared_counts(path, size));
-
+void configure(Assimp::Importer& importer) {
   // No logger is created, so Assimp logs into its default NullLogger: nothing reaches stdout or stderr.
-  Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kRemovedComponents);
   // A skeleton-only file (BVH, MD5 anim …) must not turn into a mesh of bone sticks.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+}
 
-  const aiScene* scene = importer.ReadFile(path.string(), 0);
+/// Everything after Assimp's import (`scene`: what ReadFile or ReadFileFromMemory returned).
+Result<TriangleMesh> finish_import(const fs::path& path, Assimp::Importer& importer, const aiScene* scene,
+                                   const LoadOptions& options, MeshLoadStats& stats) {
   if (scene == nullptr) return file_error(path, assimp_reason(importer, "cannot be read (no reason given)"));
   stats.source_meshes = scene->mNumMeshes;
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr) return file_error(path, "contains no meshes");
@@ -342,6 +342,57 @@ Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& opt
   if (mesh.triangles.empty())
     return file_error(path, fmt::format("all {} triangles are degenerate (repeated vertex or zero area)", n_triangles));
   return mesh;
+}
+
+Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& options, MeshLoadStats& stats) {
+  FF_CHECK(check_options(path, options));
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (st.type() == fs::file_type::not_found) return file_error(path, "no such file");
+  if (ec) return file_error(path, one_line(ec.message()));
+  if (st.type() == fs::file_type::directory) return file_error(path, "is a directory, not a mesh file");
+  if (st.type() != fs::file_type::regular) return file_error(path, "is not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (!ec && size == 0) return file_error(path, "file is empty");
+  if (!ec) FF_CHECK(check_declared_counts(path, size));
+
+  Assimp::Importer importer;
+  configure(importer);
+  const aiScene* scene = importer.ReadFile(path.string(), 0);
+  return finish_import(path, importer, scene, options, stats);
+}
+
+Result<TriangleMesh> load_mesh_memory_impl(std::span<const std::uint8_t> bytes, const fs::path& name,
+                                           const LoadOptions& options, MeshLoadStats& stats) {
+  FF_CHECK(check_options(name, options));
+  if (bytes.empty()) return file_error(name, "file is empty");
+  const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  FF_CHECK(check_declared_counts(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size()));
+
+  Assimp::Importer importer;
+  configure(importer);
+  std::string hint = name.extension().string();  // Assimp picks the importer by it: "obj", "ply" ...
+  if (!hint.empty()) hint.erase(0, 1);
+  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), 0, hint.c_str());
+  return finish_import(name, importer, scene, options, stats);
+}
+
+/// `import()`, keeping the no-throw promise: Assimp catches its own import errors; this catches allocation failures
+/// in the merge and anything an importer lets through.
+template <class F>
+Result<TriangleMesh> guarded(const fs::path& path, MeshLoadStats* stats, F&& import) {
+  MeshLoadStats local;
+  MeshLoadStats& s = stats != nullptr ? *stats : local;
+  s = {};
+  try {
+    return import(s);
+  } catch (const std::bad_alloc&) {
+    return file_error(path, "out of memory while reading");
+  } catch (const std::exception& e) {
+    return file_error(path, one_line(e.what()));
+  } catch (...) {
+    return file_error(path, "unknown error while reading");
+  }
 }
 
 }  // namespace
@@ -370,20 +421,12 @@ Status MeshTransform::validate() const {
 }
 
 Result<TriangleMesh> load_mesh(const fs::path& path, const LoadOptions& options, MeshLoadStats* stats) {
-  MeshLoadStats local;
-  MeshLoadStats& s = stats != nullptr ? *stats : local;
-  s = {};
-  // Assimp catches its own import errors; this keeps the no-throw promise for allocation failures in the merge
-  // and anything an importer lets through.
-  try {
-    return load_mesh_impl(path, options, s);
-  } catch (const std::bad_alloc&) {
-    return file_error(path, "out of memory while reading");
-  } catch (const std::exception& e) {
-    return file_error(path, one_line(e.what()));
-  } catch (...) {
-    return file_error(path, "unknown error while reading");
-  }
+  return guarded(path, stats, [&](MeshLoadStats& s) { return load_mesh_impl(path, options, s); });
+}
+
+Result<TriangleMesh> load_mesh_from_memory(std::span<const std::uint8_t> bytes, const fs::path& name,
+                                           const LoadOptions& options, MeshLoadStats* stats) {
+  return guarded(name, stats, [&](MeshLoadStats& s) { return load_mesh_memory_impl(bytes, name, options, s); });
 }
 
 void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {

@@ -9,7 +9,9 @@
 #include "io/triangle_mesh.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <span>
 
 namespace ff::io {
 
@@ -54,6 +56,10 @@ struct MeshLoadStats {
 /// triangles, more than `options.max_vertices` vertices. Never throws.
 Result<TriangleMesh> load_mesh(const std::filesystem::path& path, const LoadOptions& options = {},
                                MeshLoadStats* stats = nullptr);
+/// load_mesh() on the bytes of a mesh file in memory (the fuzz targets' way in): `name` stands for the file in
+/// messages, and its extension tells Assimp the format ("mesh.obj"); the same checks, the same errors.
+Result<TriangleMesh> load_mesh_from_memory(std::span<const std::uint8_t> bytes, const std::filesystem::path& name,
+                                           const LoadOptions& options = {}, MeshLoadStats* stats = nullptr);
 
 /// Applies `t` to every vertex in place; a mirroring `t` (MeshTransform::mirrors) also reverses every triangle's
 /// winding, so outward stays outward.

@@ -70,12 +70,12 @@ Status write_particles_ply(const std::filesystem::path& path, const ParticleFram
   return write_file_atomic(path, bytes);
 }
 
-Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return input_error(fmt::format("{}: cannot open", path.string()));
+namespace {
+/// The reader behind read_particles_ply and decode_particles_ply; `file` stands for the file in messages.
+Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
   std::string line;
   std::getline(in, line);
-  if (line != "ply") return input_error(fmt::format("{}: not a PLY file", path.string()));
+  if (line != "ply") return input_error(fmt::format("{}: not a PLY file", file));
   std::size_t n = 0;
   bool in_vertex = false, binary_le = false;
   struct Prop { std::string name; int size; };
@@ -97,16 +97,16 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
       ls >> name;
       in_vertex = name == "vertex";
       if (in_vertex) ls >> n;
-      else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", path.string(), name));
+      else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", file, name));
     } else if (word == "property" && in_vertex) {
       std::string type, name;
       ls >> type >> name;
       if (type == "float" || type == "float32") props.push_back({name, 4});
       else if (type == "uchar" || type == "uint8") props.push_back({name, 1});
-      else return input_error(fmt::format("{}: unsupported property type '{}'", path.string(), type));
+      else return input_error(fmt::format("{}: unsupported property type '{}'", file, type));
     }
   }
-  if (!binary_le) return input_error(fmt::format("{}: particle PLY must be binary_little_endian", path.string()));
+  if (!binary_le) return input_error(fmt::format("{}: particle PLY must be binary_little_endian", file));
   int ix = -1, ivx = -1, itg = -1, off = 0;
   for (const auto& p : props) {
     if (p.name == "x") ix = off;
@@ -115,7 +115,7 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
     off += p.size;
   }
   // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply.
-  if (ix < 0) return input_error(fmt::format("{}: no x y z properties", path.string()));
+  if (ix < 0) return input_error(fmt::format("{}: no x y z properties", file));
   const std::size_t stride = static_cast<std::size_t>(off);
   // A header may claim any count: check it against the file before allocating.
   const auto here = in.tellg();
@@ -124,11 +124,11 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
   in.seekg(here);
   if (stride == 0 || n > size / stride)
     return input_error(fmt::format("{}: truncated ({} bytes of particle data for {} particles of {} bytes)",
-                                   path.string(), size, n, stride));
+                                   file, size, n, stride));
   std::vector<char> buf(n * stride);
   in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
   if (static_cast<std::size_t>(in.gcount()) != buf.size())
-    return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", path.string(), in.gcount(), buf.size()));
+    return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", file, in.gcount(), buf.size()));
   ParticleFrame f;
   f.comments = std::move(comments);
   f.positions.resize(n);
@@ -157,6 +157,18 @@ Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
       std::memcpy(&f.scalars[s].second[i], rec + scalar_offset[s], 4);
   }
   return f;
+}
+}  // namespace
+
+Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return input_error(fmt::format("{}: cannot open", path.string()));
+  return read_particles(in, path.string());
+}
+
+Result<ParticleFrame> decode_particles_ply(std::span<const std::uint8_t> bytes, std::string_view name) {
+  std::istringstream in(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), std::ios::binary);
+  return read_particles(in, name);
 }
 
 }  // namespace ff::io

@@ -53,5 +53,7 @@ struct ParticleFrame {
 /// Reads a binary little-endian PLY written by write_particles_ply (vertex element with float x y z and
 /// optional float vx vy vz / uchar target, in any order). Other layouts give an Input error.
 Result<ParticleFrame> read_particles_ply(const std::filesystem::path& path);
+/// The same from the bytes of such a file; `name` stands for the file in messages.
+Result<ParticleFrame> decode_particles_ply(std::span<const std::uint8_t> bytes, std::string_view name);
 
 }  // namespace ff::io
