@@ -21,6 +21,7 @@ struct Reader {
   std::size_t at = 0;
   bool raw(void* p, std::size_t n) {
     if (n > in.size() - at) return false;
+    if (n == 0) return true;  // p may be an empty array's null data(): memcpy must not see it
     std::memcpy(p, in.data() + at, n);
     at += n;
     return true;
@@ -66,6 +67,10 @@ Result<Checkpoint> decode_checkpoint(std::span<const std::uint8_t> bytes) {
   std::uint64_t n = 0;
   if (!r.pod(c.next_frame) || !r.pod(c.time) || !r.pod(c.scene_hash) || !r.pod(n) || n > (1ull << 32))
     return input_error("checkpoint: truncated header");
+  // The count is checked against the bytes there are before anything is allocated for it.
+  std::size_t per_particle = 0;
+  c.particles.for_each_state_array([&](const auto& a) { per_particle += sizeof(a[0]); });
+  if (n > (r.in.size() - r.at) / per_particle) return input_error("checkpoint: truncated particle data");
   c.particles.resize(static_cast<std::size_t>(n));
   bool ok = true;
   c.particles.for_each_state_array([&](auto& a) {
