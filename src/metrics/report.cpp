@@ -11,6 +11,14 @@ using nlohmann::json;
 namespace {
 // NaN is not JSON: metrics that are undefined are stored as null.
 double num_of(const json& j) { return j.is_number() ? j.get<double>() : NAN; }
+/// An integer field of a row read back; false when `j` is not an integer (a float would convert with undefined
+/// behaviour when out of range).
+template <class T>
+bool integer(const json& j, T& out) {
+  if (!j.is_number_integer()) return false;
+  out = j.get<T>();
+  return true;
+}
 
 }  // namespace
 
@@ -33,15 +41,16 @@ json target_rows_to_json(const std::vector<TargetRow>& rows) {
   return a;
 }
 
+// Rows come back from a checkpoint's extra block, which resume reads leniently (pipeline/run.cpp): a row that is not an
+// array of the expected length and kinds is skipped, never thrown on or read past its end.
 std::vector<TargetRow> target_rows_from_json(const json& a) {
   std::vector<TargetRow> rows;
   if (!a.is_array()) return rows;
   for (const auto& e : a) {
     TargetRow r;
-    r.frame = e[0].get<int>();
-    r.target = e[1].get<int>();
-    r.m.fluid = e[2].get<std::size_t>();
-    r.m.controlled = e[3].get<std::size_t>();
+    if (!e.is_array() || e.size() < 11 || !integer(e[0], r.frame) || !integer(e[1], r.target) ||
+        !integer(e[2], r.m.fluid) || !integer(e[3], r.m.controlled))
+      continue;
     r.m.error_rate = num_of(e[4]);
     r.m.e_fwd = num_of(e[5]);
     r.m.e_bwd = num_of(e[6]);
@@ -58,10 +67,14 @@ std::vector<FrameRow> rows_from_json(const json& a) {
   std::vector<FrameRow> rows;
   if (!a.is_array()) return rows;
   for (const auto& e : a) {
-    FrameRow r{e[0].get<int>(), e[1].get<double>(), e[2].get<std::size_t>(), e[3].get<double>(), e[4].get<int>(),
-               e[5].get<long>(), e[6].get<double>(), e[7].get<double>(), e[8].get<double>()};
+    FrameRow r;
+    if (!e.is_array() || e.size() < 9 || !integer(e[0], r.frame) || !integer(e[2], r.particles) ||
+        !integer(e[4], r.substeps) || !integer(e[5], r.iterations))
+      continue;
+    r.time = num_of(e[1]), r.step_seconds = num_of(e[3]);
+    r.density_error_mean = num_of(e[6]), r.density_error_max = num_of(e[7]), r.peak_memory_mib = num_of(e[8]);
     if (e.size() >= 16) {
-      r.controlled = e[9].get<std::size_t>();
+      if (!integer(e[9], r.controlled)) continue;
       r.error_rate = num_of(e[10]);
       r.e_fwd = num_of(e[11]);
       r.e_bwd = num_of(e[12]);

@@ -70,7 +70,8 @@ struct TargetRow {
 nlohmann::json json_number(double v);
 std::string metrics_csv(const std::vector<FrameRow>& rows);
 std::string target_metrics_csv(const std::vector<TargetRow>& rows);
-/// The rows as JSON arrays (a checkpoint's "rows" / "target_rows"; NaN as null) and back.
+/// The rows as JSON arrays (a checkpoint's "rows" / "target_rows"; NaN as null) and back (a row that is not such an
+/// array is skipped; never throws).
 nlohmann::json rows_to_json(const std::vector<FrameRow>& rows);
 std::vector<FrameRow> rows_from_json(const nlohmann::json& a);
 nlohmann::json target_rows_to_json(const std::vector<TargetRow>& rows);
