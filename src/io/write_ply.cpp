@@ -1,5 +1,6 @@
 #include "io/write_ply.h"
 
+#include "core/printable.h"
 #include "io/atomic_file.h"
 
 #include <fmt/format.h>
@@ -97,25 +98,36 @@ Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
       ls >> name;
       in_vertex = name == "vertex";
       if (in_vertex) ls >> n;
-      else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", file, name));
+      else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", file, printable(name)));
     } else if (word == "property" && in_vertex) {
       std::string type, name;
       ls >> type >> name;
       if (type == "float" || type == "float32") props.push_back({name, 4});
       else if (type == "uchar" || type == "uint8") props.push_back({name, 1});
-      else return input_error(fmt::format("{}: unsupported property type '{}'", file, type));
+      else return input_error(fmt::format("{}: unsupported property type '{}'", file, printable(type)));
     }
   }
   if (!binary_le) return input_error(fmt::format("{}: particle PLY must be binary_little_endian", file));
   int ix = -1, ivx = -1, itg = -1, off = 0;
-  for (const auto& p : props) {
-    if (p.name == "x") ix = off;
-    if (p.name == "vx") ivx = off;
+  std::size_t kx = props.size(), kvx = props.size();
+  for (std::size_t k = 0; k < props.size(); ++k) {
+    const auto& p = props[k];
+    if (p.name == "x") ix = off, kx = k;
+    if (p.name == "vx") ivx = off, kvx = k;
     if (p.name == "target") itg = off;
+    if (p.name == "target" && p.size != 1) return input_error(fmt::format("{}: property 'target' must be a uchar", file));
     off += p.size;
   }
-  // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply.
+  // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply: each triple is read as one.
+  const auto float_triple = [&](std::size_t k, const char* a, const char* b, const char* c) {
+    return k + 2 < props.size() && props[k].name == a && props[k + 1].name == b && props[k + 2].name == c &&
+           props[k].size == 4 && props[k + 1].size == 4 && props[k + 2].size == 4;
+  };
   if (ix < 0) return input_error(fmt::format("{}: no x y z properties", file));
+  if (!float_triple(kx, "x", "y", "z"))
+    return input_error(fmt::format("{}: x y z must be three consecutive float properties", file));
+  if (ivx >= 0 && !float_triple(kvx, "vx", "vy", "vz"))
+    return input_error(fmt::format("{}: vx vy vz must be three consecutive float properties", file));
   const std::size_t stride = static_cast<std::size_t>(off);
   // A header may claim any count: check it against the file before allocating.
   const auto here = in.tellg();
