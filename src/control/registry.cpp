@@ -1,5 +1,7 @@
 #include "control/registry.h"
 
+#include "core/printable.h"
+
 #include <fmt/format.h>
 
 #include <array>
@@ -32,7 +34,7 @@ std::string controller_names() {
 
 Status ControllerSpec::validate(std::string_view path) const {
   if (!find_controller(name))
-    return param_error(fmt::format("{}.name = \"{}\" is not one of: {}", path, name, controller_names()));
+    return param_error(fmt::format("{}.name = \"{}\" is not one of: {}", path, printable(name), controller_names()));
   Status st;
   std::apply([&](const auto&... p) {
     ((st = st.ok() ? core::validate_fields(p, fmt::format("{}.{}", path, p.info.name)) : st), ...);
@@ -44,7 +46,7 @@ Result<std::unique_ptr<sim::Controller>> make_controller(const ControllerSpec& s
                                                          const ControlContext& ctx) {
   FF_CHECK(spec.validate());
   Result<std::unique_ptr<sim::Controller>> made = param_error(
-      fmt::format("controller \"{}\" is not one of: {}", spec.name, controller_names()));
+      fmt::format("controller \"{}\" is not one of: {}", printable(spec.name), controller_names()));
   std::apply([&](const auto&... p) {
     ((p.info.name == spec.name ? (void)(made = make_controller(std::move(targets), ctx, p)) : void()), ...);
   }, spec.params);

@@ -1,5 +1,7 @@
 #include "io/json_reader.h"
 
+#include "core/printable.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -42,7 +44,8 @@ Status JsonObject::check_object() const {
 bool JsonObject::has(std::string_view key) const { return j_.is_object() && j_.contains(key); }
 
 std::string JsonObject::path_of(std::string_view key) const {
-  return path_.empty() ? std::string(key) : fmt::format("{}.{}", path_, key);
+  // A key is any JSON string: one with a newline or a control character must not break the message's line.
+  return path_.empty() ? printable(key) : fmt::format("{}.{}", path_, printable(key));
 }
 
 const json* JsonObject::child(std::string_view key) {
@@ -53,9 +56,9 @@ const json* JsonObject::child(std::string_view key) {
 
 namespace {
 Status type_error(const std::string& path, std::string_view want, const json& v) {
-  std::string shown = v.dump();
+  std::string shown = v.dump();  // JSON escapes control characters, except DEL
   if (shown.size() > 40) shown = shown.substr(0, 37) + "...";
-  return param_error(fmt::format("{}: expected {}, got {}", path, want, shown));
+  return param_error(fmt::format("{}: expected {}, got {}", path, want, printable(shown)));
 }
 }  // namespace
 

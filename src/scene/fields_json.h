@@ -5,6 +5,7 @@
 // write → read gives the same struct (scene_io_test checks it for a whole scene).
 #include "core/error.h"
 #include "core/fields.h"
+#include "core/printable.h"
 #include "io/json_reader.h"
 
 #include <fmt/format.h>
@@ -54,7 +55,8 @@ Status read_fields(io::JsonObject& o, P& params, const std::filesystem::path& ba
       st = o.get(key, name);
       if (!st.ok()) return;
       const std::optional<T> e = core::find_choice<T>(name);
-      if (!e) st = param_error(fmt::format("{} = \"{}\" is not one of: {}", o.path_of(key), name, core::choice_names(v)));
+      if (!e)
+        st = param_error(fmt::format("{} = \"{}\" is not one of: {}", o.path_of(key), printable(name), core::choice_names(v)));
       else v = *e;
     } else if constexpr (std::is_same_v<T, std::filesystem::path>) {
       std::string s;

@@ -1,6 +1,7 @@
 #include "scene/scene.h"
 
 #include "core/params.h"
+#include "core/printable.h"
 #include "io/json_reader.h"
 #include "scene/fields_json.h"
 
@@ -71,10 +72,12 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
     // Re-parse with exceptions only to get the position of the syntax error for the message.
     try {
       [[maybe_unused]] const json again = json::parse(text, nullptr, true, true);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // a parse_error, or an out_of_range for a number like 1e999999
       std::string what = e.what();
-      const auto colon = what.find("parse error");
-      return param_error(fmt::format("{}: invalid JSON: {}", source_name, colon == std::string::npos ? what : what.substr(colon)));
+      const auto colon = what.find("parse error"), id_end = what.find("] ");
+      what = colon != std::string::npos ? what.substr(colon) : id_end != std::string::npos ? what.substr(id_end + 2) : what;
+      // The parser quotes what it last read, which may hold any character of the file but a newline.
+      return param_error(fmt::format("{}: invalid JSON: {}", source_name, printable(what, 300)));
     }
     return param_error(fmt::format("{}: invalid JSON", source_name));
   }
