@@ -66,12 +66,13 @@ std::vector<std::uint8_t> encode_frame(const FrameInfo& info, std::span<const Ve
   put(b, 32, info.sim_fps);
   put(b, 36, info.controlled);
   for (int a = 0; a < 3; ++a) put(b, 40 + 4 * std::size_t(a), lo[a]), put(b, 52 + 4 * std::size_t(a), hi[a]);
-  Vec3f inv;
-  for (int a = 0; a < 3; ++a) inv[a] = hi[a] > lo[a] ? 65535.0f / (hi[a] - lo[a]) : 0.0f;
+  // In double: 65535 / (hi − lo) overflows a float for a box thinner than about 2e-34 (every particle then went to hi).
+  Vec3d inv;
+  for (int a = 0; a < 3; ++a) inv[a] = hi[a] > lo[a] ? 65535.0 / (double(hi[a]) - double(lo[a])) : 0.0;
   std::uint8_t* q = b.data() + kFrameHeaderBytes;
   for (std::size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) {
-      const float v = std::isfinite(x[i][a]) ? std::clamp((x[i][a] - lo[a]) * inv[a], 0.0f, 65535.0f) : 0.0f;
+      const double v = std::isfinite(x[i][a]) ? std::clamp((double(x[i][a]) - lo[a]) * inv[a], 0.0, 65535.0) : 0.0;
       const auto u = static_cast<std::uint16_t>(std::lround(v));
       std::memcpy(q + 6 * i + 2 * std::size_t(a), &u, 2);
     }
@@ -94,10 +95,13 @@ Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> b) {
   f.info.controlled = get<std::uint32_t>(b, 36);
   for (int a = 0; a < 3; ++a) f.lo[a] = get<float>(b, 40 + 4 * std::size_t(a)), f.hi[a] = get<float>(b, 52 + 4 * std::size_t(a));
   f.positions.resize(n);
-  const Vec3f step = (f.hi - f.lo) / 65535.0f;
+  // In double, as the viewer does (web/src/protocol.js): in float the step of a very thin box is a denormal that
+  // has lost its precision, and hi − lo of a very wide one overflows.
+  const Vec3d lo = f.lo.cast<double>(), step = (f.hi.cast<double>() - lo) / 65535.0;
   for (std::size_t i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a)
-      f.positions[i][a] = f.lo[a] + step[a] * float(get<std::uint16_t>(b, header + 6 * i + 2 * std::size_t(a)));
+      f.positions[i][a] =
+          static_cast<float>(lo[a] + step[a] * double(get<std::uint16_t>(b, header + 6 * i + 2 * std::size_t(a))));
   f.targets.assign(b.begin() + std::ptrdiff_t(header + 6 * n), b.begin() + std::ptrdiff_t(header + 7 * n));
   return f;
 }
