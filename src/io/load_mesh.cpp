@@ -7,9 +7,13 @@
 //      transforms (merging the meshes), split by primitive type.
 // Then the triangle meshes are merged (indices offset), options.transform is applied, degenerate triangles
 // are dropped and unreferenced vertices removed. No unit or global scaling: units stay as in the file.
-// Before Assimp sees a file, OFF and PLY headers are checked against the file size (see
-// check_declared_counts: Assimp 5.2.5 allocates whatever they declare).
+// Before Assimp sees a file (check_before_assimp), OFF and PLY headers are checked against the file size
+// (check_declared_counts: Assimp 5.2.5 allocates whatever they declare), a PLY header must have its end_header
+// (without one Assimp 5.2.5 never returns), and an OFF file's lines must not overrun Assimp's OFF reader
+// (check_off_lines).
 #include "io/load_mesh.h"
+
+#include "core/printable.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
@@ -44,7 +48,7 @@ namespace fs = std::filesystem;
 constexpr double kDegenerateFactor = 1e-12;
 /// Assimp error strings longer than this are cut (a parser may quote a whole line of the file).
 constexpr std::size_t kMaxReasonLength = 300;
-/// How much of a file check_declared_counts reads to find the OFF/PLY header.
+/// How much of a file check_before_assimp reads to find the OFF/PLY header.
 constexpr std::uintmax_t kHeaderBytes = 64 * 1024;
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
@@ -149,6 +153,102 @@ bool is_off_keyword(std::string_view t) {
   return p.empty();
 }
 
+/// True when Assimp will read the file as OFF: by its extension, or by the keyword it starts with.
+bool read_as_off(const fs::path& path, std::string_view head) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  std::size_t i = 0;
+  return ext == ".off" || is_off_keyword(next_token(head, i));
+}
+
+/// Assimp 5.2.5's OFF reader, as far as it counts faces (code/AssetLib/OFF/OFFLoader.cpp, on the helpers of
+/// ParsingUtils.h): it drops a face line whose vertex count is 0 or over 9 by decrementing the mesh's face count, once
+/// per such line and without counting the line, so more of them than the header's faces wrap the count round and
+/// Assimp reads far past its face array (SIGSEGV). It also copies each line into a 4096-byte buffer and writes one
+/// byte past it for a longer line. This walks `text` (the whole file) the way that reader does and refuses both.
+Status check_off_lines(const fs::path& path, std::string_view text) {
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // Assimp drops a UTF-8 byte order mark
+  if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF") || text.starts_with(std::string_view("\0\0\xFE\xFF", 4)))
+    return file_error(path, "OFF in UTF-16 or UTF-32 is not supported");
+  // Assimp's copy of the file ends with a NUL, and its parsing stops at the first NUL in it.
+  const std::size_t end = text.size() + 1;
+  std::size_t p = 0;
+  const auto at = [&](std::size_t k) { return k < text.size() ? text[k] : '\0'; };
+  const auto line_end = [](char c) { return c == '\r' || c == '\n' || c == '\0' || c == '\f'; };
+  const auto skip_spaces_and_line_end = [&] {
+    while (at(p) == ' ' || at(p) == '\t' || at(p) == '\r' || at(p) == '\n') ++p;
+  };
+  const auto skip_line = [&] {
+    while (at(p) != '\r' && at(p) != '\n' && at(p) != '\0') ++p;
+    while (at(p) == '\r' || at(p) == '\n') ++p;
+  };
+  const auto token = [&] {  // OFFLoader's NextToken
+    skip_spaces_and_line_end();
+    while (p < end && (at(p) == '#' || at(p) == '\n' || at(p) == '\r')) skip_line(), skip_spaces_and_line_end();
+  };
+  const auto number = [&](std::size_t& k) {  // strtoul10, wrapping like Assimp's unsigned int
+    std::uint32_t v = 0;
+    while (at(k) >= '0' && at(k) <= '9') v = v * 10u + static_cast<std::uint32_t>(at(k++) - '0');
+    return v;
+  };
+  std::size_t line_number = 0;
+  bool too_long = false;
+  const auto next_line = [&](std::string_view& line) {  // GetNextLine into char[4096]
+    if (at(p) == '\0') return false;
+    const std::size_t b = p;
+    while (!line_end(at(p)) && p - b < 4096) ++p;
+    too_long = too_long || p - b == 4096;
+    line = text.substr(b, p - b);
+    while (line_end(at(p)) && at(p) != '\0') ++p;
+    ++line_number;
+    return true;
+  };
+
+  token();
+  bool dimension = false;
+  if (p + 2 < end && at(p) == 'S' && at(p + 1) == 'T') p += 2;
+  if (p + 1 < end && at(p) == 'C') ++p;
+  if (p + 1 < end && at(p) == 'N') ++p;
+  if (p + 1 < end && at(p) == '4') ++p;
+  if (p + 1 < end && at(p) == 'n') dimension = true, ++p;
+  if (p + 3 < end && at(p) == 'O' && at(p + 1) == 'F' && at(p + 2) == 'F') {
+    p += 3;
+    token();
+  } else {
+    token();
+    if (p + 1 >= end || at(p) < '0' || at(p) > '9') return {};  // Assimp: "Header is invalid"
+  }
+  if (dimension) {
+    if (number(p) > 3) return {};  // Assimp: "higher than 3 unsupported"
+    token();
+  }
+  token();
+  const std::uint32_t vertices = number(p);
+  token();
+  const std::uint32_t faces = number(p);
+  token();
+  number(p);  // edges
+  token();
+  if (vertices == 0 || faces == 0) return {};  // Assimp refuses these itself
+
+  std::string_view line;
+  for (std::uint32_t v = 0; v < vertices && next_line(line);) ++v;
+  std::uint64_t dropped = 0;
+  for (std::uint32_t f = 0; f < faces && next_line(line);) {
+    std::size_t k = static_cast<std::size_t>(line.data() - text.data());  // SkipSpaces, then strtoul10
+    while (at(k) == ' ' || at(k) == '\t') ++k;
+    const std::uint32_t n = number(k);
+    if (n >= 1 && n <= 9) {
+      ++f;
+    } else if (++dropped > faces) {
+      return file_error(path, fmt::format("{} face lines without a vertex count of 1 to 9, more than the header's {} "
+                                          "faces", dropped, faces));
+    }
+  }
+  if (too_long) return file_error(path, "has a line of 4096 characters or more (more than the OFF reader takes)");
+  return {};
+}
+
 /// Assimp 5.2.5's OFF and PLY readers allocate (and zero) whatever their header declares before reading any
 /// data: invalid/OutOfMemory.off declares 353535235358 vertices and makes Assimp touch 16 GB for 30 s; a PLY
 /// header with "element vertex 300000000" grows without bound as well. Every element takes at least one byte
@@ -160,7 +260,10 @@ Status check_declared_counts(const fs::path& path, std::string_view h, std::uint
                       fmt::format("header declares {} {}, more than a {}-byte file can hold", n, what, file_size));
   };
 
-  if (h.starts_with("ply\n") || h.starts_with("ply\r\n")) {  // lines "element <name> <count>" until end_header
+  // PLY: Assimp takes any first line that starts with "ply" or "PLY" (in any case) for its magic.
+  const auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  if (h.size() >= 3 && lower(h[0]) == 'p' && lower(h[1]) == 'l' && lower(h[2]) == 'y') {
+    // Lines "element <name> <count>" until end_header.
     std::size_t line_start = 0;
     while (line_start < h.size()) {
       std::size_t line_end = h.find('\n', line_start);
@@ -168,22 +271,31 @@ Status check_declared_counts(const fs::path& path, std::string_view h, std::uint
       const std::string_view line = h.substr(line_start, line_end - line_start);
       line_start = line_end + 1;
       if (line.starts_with("end_header")) break;
-      if (!line.starts_with("element ")) continue;
-      std::size_t i = 8;
+      if (!line.starts_with("element") || line.size() < 8 || !std::isspace(static_cast<unsigned char>(line[7]))) continue;
+      std::size_t i = 7;
       const std::string_view name = next_token(line, i);
       if (const auto n = parse_count(next_token(line, i)); n && *n > file_size)
-        return too_many(*n, fmt::format("'{}' elements", name));
+        return too_many(*n, fmt::format("'{}' elements", printable(name)));
     }
+    // Assimp 5.2.5 reads a header without its end_header line for ever: "end_header" must start a line and end
+    // there (or at a space).
+    bool end_header = false;
+    for (std::size_t k = h.find("end_header"); k != std::string_view::npos && !end_header; k = h.find("end_header", k + 1)) {
+      const std::size_t after = k + 10;
+      end_header = k > 0 && (h[k - 1] == '\n' || h[k - 1] == '\r') &&
+                   (after == h.size() || h[after] == '\0' || std::isspace(static_cast<unsigned char>(h[after])));
+    }
+    if (!end_header)
+      return file_error(path, fmt::format("PLY header has no end_header line{}",
+                                          file_size > h.size() ? fmt::format(" in its first {} bytes", h.size()) : ""));
     return {};
   }
 
   // OFF: optional keyword (and dimension for nOFF), then "<vertices> <faces> <edges>".
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (!read_as_off(path, h)) return {};
   std::size_t i = 0;
   std::string_view t = next_token(h, i);
   const bool keyword = is_off_keyword(t);
-  if (!keyword && ext != ".off") return {};
   if (keyword) {
     if (t.find('n') != std::string_view::npos) next_token(h, i);  // nOFF: the dimension comes first
     t = next_token(h, i);
@@ -193,13 +305,30 @@ Status check_declared_counts(const fs::path& path, std::string_view h, std::uint
   return {};
 }
 
-Status check_declared_counts(const fs::path& path, std::uintmax_t file_size) {
+/// What is checked before Assimp sees a file: the counts its header declares (`head`: its first kHeaderBytes), and
+/// the lines of an OFF file (`whole()`: all of its bytes, asked for only then).
+template <class Whole>
+Status check_before_assimp(const fs::path& path, std::string_view head, std::uintmax_t file_size, Whole&& whole) {
+  FF_CHECK(check_declared_counts(path, head, file_size));
+  if (!read_as_off(path, head)) return {};
+  return check_off_lines(path, whole());
+}
+
+Status check_before_assimp(const fs::path& path, std::uintmax_t file_size) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return {};  // Assimp reports the open failure
   std::string head(static_cast<std::size_t>(std::min(file_size, kHeaderBytes)), '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<std::size_t>(in.gcount()));
-  return check_declared_counts(path, head, file_size);
+  std::string all;
+  return check_before_assimp(path, head, file_size, [&] {
+    all.resize(static_cast<std::size_t>(file_size));
+    in.clear();
+    in.seekg(0);
+    in.read(all.data(), static_cast<std::streamsize>(all.size()));
+    all.resize(static_cast<std::size_t>(in.gcount()));
+    return std::string_view(all);
+  });
 }
 
 // ---- scene → TriangleMesh ----
@@ -354,7 +483,7 @@ Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& opt
   if (st.type() != fs::file_type::regular) return file_error(path, "is not a regular file");
   const std::uintmax_t size = fs::file_size(path, ec);
   if (!ec && size == 0) return file_error(path, "file is empty");
-  if (!ec) FF_CHECK(check_declared_counts(path, size));
+  if (!ec) FF_CHECK(check_before_assimp(path, size));
 
   Assimp::Importer importer;
   configure(importer);
@@ -367,7 +496,8 @@ Result<TriangleMesh> load_mesh_memory_impl(std::span<const std::uint8_t> bytes, 
   FF_CHECK(check_options(name, options));
   if (bytes.empty()) return file_error(name, "file is empty");
   const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-  FF_CHECK(check_declared_counts(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size()));
+  FF_CHECK(check_before_assimp(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size(),
+                               [&] { return all; }));
 
   Assimp::Importer importer;
   configure(importer);
