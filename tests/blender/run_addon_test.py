@@ -3,7 +3,8 @@
     run_addon_test.py --cli BUILD/src/app/fluidform [--blender blender] [--keep DIR]
 Packages the add-on with scripts/package_blender_addon.py into a temporary folder, then runs the test in Debian's
 Blender headless, with its user scripts and config in that folder (the add-on is installed from the zip there,
-nothing in $HOME changes). Exit 0: passed; 1: failed; 77: skipped (no Blender, or Blender's Python lacks numpy),
+nothing in $HOME changes); then, where xvfb-run is installed, the modal path in Blender's UI on a virtual X server
+(tests/blender/addon_ui_test.py; skipped with a line saying so otherwise). Exit 0: passed; 1: failed; 77: skipped (no Blender, or Blender's Python lacks numpy),
 with a line saying why."""
 import argparse
 import json
@@ -61,6 +62,23 @@ def main():
             return 1
         print("PASS: the add-on installed from its zip formed the bunny and the two-object scene, cancelled cleanly "
               "and failed cleanly", flush=True)
+        # The modal path (timer, status bar, Esc) needs Blender's UI: under a virtual X server where there is one.
+        xvfb = shutil.which("xvfb-run", path=env["PATH"])
+        if xvfb is None:
+            print("SKIP (UI part): xvfb-run is not installed (apt-get install xvfb): the modal Form and Esc did not "
+                  "run", flush=True)
+            return 0
+        ui = [xvfb, "-a", "-s", "-screen 0 1280x900x24", blender, "--factory-startup", "-noaudio",
+              "--enable-event-simulate", "-P", os.path.join(ROOT, "tests", "blender", "addon_ui_test.py"), "--",
+              "--zip", zip_path, "--cli", os.path.abspath(args.cli), "--work", work]
+        p = subprocess.run(ui, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600)
+        print(p.stdout, flush=True)
+        line = next((l for l in p.stdout.splitlines() if l.startswith("FLUIDFORM_ADDON_UI_TEST ")), None)
+        if line is None or p.returncode != 0 or json.loads(line.split(" ", 1)[1]).get("failed"):
+            print(f"FAIL: the UI part failed (Blender exit code {p.returncode})", flush=True)
+            return 1
+        print("PASS (UI part): the modal Form kept the event loop running, imported, and Esc cancelled cleanly",
+              flush=True)
         return 0
     finally:
         if not args.keep:
