@@ -2,6 +2,7 @@
 #include "app/cli.h"
 #include "app/progress_bar.h"
 #include "io/particle_frames.h"
+#include "io/write_mesh.h"
 #include "pipeline/mesh_export.h"
 #include "surface/surface_params.h"
 
@@ -9,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <memory>
 
@@ -37,11 +39,16 @@ int run_mesh(MeshCli& o) {
   if (std::error_code ec; fs::is_regular_file(o.input / "report.json", ec)) {
     std::ifstream in(o.input / "report.json");
     const auto report = nlohmann::json::parse(in, nullptr, false);
-    if (!report.is_discarded() && report.contains("scene") && report["scene"].contains("targets"))
+    // Read defensively (a report is ours, but may be edited): a target without a readable tint keeps the default,
+    // so target k always gets material k; values are clamped to [0, 1].
+    if (report.is_object() && report.contains("scene") && report["scene"].is_object() &&
+        report["scene"].contains("targets") && report["scene"]["targets"].is_array())
       for (const auto& t : report["scene"]["targets"]) {
-        const auto tint = t.value("tint", nlohmann::json());
-        if (tint.is_array() && tint.size() == 3 && tint[0].is_number() && tint[1].is_number() && tint[2].is_number())
-          o.mesh.target_tints.emplace_back(tint[0].get<float>(), tint[1].get<float>(), tint[2].get<float>());
+        Vec3f tint = io::WaterMaterial{}.tint;
+        if (t.is_object() && t.contains("tint") && t["tint"].is_array() && t["tint"].size() == 3)
+          for (int a = 0; a < 3; ++a)
+            if (t["tint"][a].is_number()) tint[a] = std::clamp(t["tint"][a].get<float>(), 0.0f, 1.0f);
+        o.mesh.target_tints.push_back(tint);
       }
   }
   spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());

@@ -123,8 +123,9 @@ Status GlbOptions::validate(std::size_t frames) const {
       if (!std::isfinite(times[k]) || (k && !(times[k] > times[k - 1])))
         return param_error("glb: frame times must be finite and increasing");
   }
+  if (materials.empty() != triangle_material.empty())
+    return param_error("glb: per-triangle materials need both the materials and each triangle's material");
   if (!triangle_material.empty()) {
-    if (materials.empty()) return param_error("glb: triangle materials without materials");
     if (materials.size() > 256) return param_error(fmt::format("glb: {} materials, at most 256", materials.size()));
     if (triangle_material.size() != frames)
       return param_error(fmt::format("glb: triangle materials for {} frames, not {}", triangle_material.size(), frames));

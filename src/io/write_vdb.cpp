@@ -5,6 +5,7 @@
 #include <cmath>
 #include <system_error>
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #ifdef FF_HAVE_OPENVDB
@@ -57,6 +58,19 @@ Status write_level_set_vdb(const fs::path& path, const TriangleMesh& mesh, const
       openvdb::io::File file(tmp.string());
       file.write({grid});
       file.close();
+    }
+    // OpenVDB does not check its stream after writing (a full disk leaves a short file): read the grid back before
+    // the file is published, and sync it, as write_file_atomic does.
+    {
+      openvdb::io::File check(tmp.string());
+      check.open(false);
+      if (!check.readGrid(o.grid_name)) throw std::runtime_error("the written file does not read back");
+      check.close();
+    }
+    if (const int fd = ::open(tmp.c_str(), O_RDONLY); fd >= 0) {
+      const int rc = ::fsync(fd);
+      ::close(fd);
+      if (rc != 0) throw std::runtime_error("fsync failed");
     }
     std::error_code ec;
     fs::rename(tmp, path, ec);

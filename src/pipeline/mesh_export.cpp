@@ -145,7 +145,8 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
                                                          std::vector<std::vector<std::uint8_t>>& labels,
                                                          core::Progress& progress) {
   std::vector<io::TriangleMesh> meshes(chosen.size());
-  if (o.target_tints.size() > 1) labels.assign(chosen.size(), {});
+  const bool label = o.target_tints.size() > 1 && o.glb && !o.final_only;  // only the GLB has per-target materials
+  if (label) labels.assign(chosen.size(), {});
   std::vector<Error> errors(chosen.size());
   std::vector<char> failed(chosen.size(), 0);
   std::vector<surface::SurfaceStats> stats(chosen.size());
@@ -164,7 +165,7 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
       errors[c] = Error{mesh.error().kind, fmt::format("{}: {}", file.string(), mesh.error().message)};
     } else {
       meshes[c] = std::move(*mesh);
-      if (o.target_tints.size() > 1) labels[c] = triangle_targets(meshes[c], *f, d, o.target_tints.size());
+      if (label) labels[c] = triangle_targets(meshes[c], *f, d, o.target_tints.size());
       const long k = io::frame_number(file);
       if (o.vdb) {
         // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.

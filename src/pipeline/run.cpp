@@ -1,5 +1,7 @@
 #include "pipeline/run.h"
 
+#include "io/write_vdb.h"
+
 #include "pipeline/mesh_export.h"
 
 #include "pipeline/auto_scene.h"
@@ -440,6 +442,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     assign_targets(initial, geometry);
   }
 
+  if (opt.mesh && opt.vdb && !io::vdb_available())
+    return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
   // Inputs are all checked before the output folder is touched.
   FF_CHECK(io::ensure_writable_dir(out));
   if (!resume) {  // a fresh run: an earlier run's checkpoints must not become this one's previous checkpoint

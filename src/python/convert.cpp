@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace ff::python {
 
@@ -189,30 +190,45 @@ PyProgress::~PyProgress() {
 void PyProgress::begin(std::string_view what, std::size_t total) {
   what_ = std::string(what);
   total_ = total;
-  call(0);
+  (void)call(0);  // a False here stops the operation at its first tick (begin cannot refuse)
 }
 
 bool PyProgress::tick(std::size_t done) { return call(done); }
 
 bool PyProgress::call(std::size_t done) {
   py::gil_scoped_acquire gil;
-  if (error_) return false;
+  if (error_ || cpp_error_) return false;
   if (PyErr_CheckSignals() != 0) {  // Ctrl-C while C++ runs: stop, and raise KeyboardInterrupt afterwards
     error_.emplace();
     return false;
   }
   if (callback_.is_none()) return true;
+  // Called from C++ frames (OpenMP workers among them): nothing may be thrown from here.
   try {
     const py::object r = callback_(what_, done, total_);
-    return r.is_none() || r.cast<bool>();
+    if (r.is_none()) return true;
+    const int truth = PyObject_IsTrue(r.ptr());  // any object: its truth value, as `if r:` would
+    if (truth < 0) {
+      error_.emplace();
+      return false;
+    }
+    if (truth == 0) refused_ = true;
+    return truth != 0;
   } catch (py::error_already_set& e) {
     error_.emplace(std::move(e));
+    return false;
+  } catch (...) {
+    cpp_error_ = std::current_exception();
     return false;
   }
 }
 
 void PyProgress::rethrow_if_any() {
-  if (!error_) return;
+  if (cpp_error_) std::rethrow_exception(std::exchange(cpp_error_, nullptr));
+  if (!error_) {
+    if (refused_) raise(Error{Error::Kind::Cancelled, "cancelled"});
+    return;
+  }
   py::error_already_set e = std::move(*error_);
   error_.reset();
   throw std::move(e);

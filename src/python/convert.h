@@ -12,6 +12,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <exception>
 #include <optional>
 #include <span>
 #include <string>
@@ -74,7 +75,8 @@ class PyProgress final : public core::Progress {
   ~PyProgress() override;
   void begin(std::string_view what, std::size_t total) override;
   bool tick(std::size_t done) override;
-  /// With the GIL held: raises the callback's exception (or KeyboardInterrupt) if one stopped the operation.
+  /// With the GIL held: raises the callback's exception (or KeyboardInterrupt) if one stopped the operation, else
+  /// Cancelled if the callback returned False (the result of an operation that ran on is then discarded).
   void rethrow_if_any();
 
  private:
@@ -83,6 +85,8 @@ class PyProgress final : public core::Progress {
   std::string what_;
   std::size_t total_ = 0;
   std::optional<py::error_already_set> error_;
+  std::exception_ptr cpp_error_;
+  bool refused_ = false;  // the callback said stop: Cancelled, even from an operation that does not stop early  // a C++ exception from the callback's conversion (never let one cross C++ frames)
 };
 
 }  // namespace ff::python

@@ -40,10 +40,16 @@ class Simulation {
     live_ = unwrap(std::move(live));
   }
 
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+  // Views outlive the simulation when a caller keeps them: hand them the buffers they point into.
+  ~Simulation() {
+    if (live_) before_change();
+  }
+
   py::dict step(int frames, bool metrics) {
     if (frames < 1) raise(param_error(fmt::format("step: frames = {} must be ≥ 1", frames)));
-    std::unique_lock lock(busy_, std::try_to_lock);
-    if (!lock) throw std::runtime_error("Simulation.step: another thread is stepping this simulation");
+    auto lock = guard("step");
     before_change();
     pipeline::LiveFrame f;
     Status st;
@@ -70,20 +76,19 @@ class Simulation {
   }
 
   void restart() {
-    std::unique_lock lock(busy_, std::try_to_lock);
-    if (!lock) throw std::runtime_error("Simulation.restart: another thread is stepping this simulation");
+    auto lock = guard("restart");
     before_change();
     check(live_->restart());
     last_ = pipeline::LiveFrame{};
   }
 
   void set_controller(const std::string& name) {
-    std::unique_lock lock(busy_, std::try_to_lock);
-    if (!lock) throw std::runtime_error("Simulation.controller: another thread is stepping this simulation");
+    auto lock = guard("controller");
     check(live_->set_controller(name));
   }
 
   py::dict set_pose(std::size_t target, const py::object& translate, const py::object& rotate, float scale) {
+    auto lock = guard("set_pose");
     pipeline::LivePose p;
     p.translate = vec3(translate, "translate");
     p.rotate_deg = vec3(rotate, "rotate");
@@ -98,13 +103,14 @@ class Simulation {
 
   // Zero-copy, read-only views of the solver's arrays, in the solver's order (it sorts particles spatially; `ids`
   // says which particle each row is).
-  py::array positions() { return view(live_->particles().position, 3); }
-  py::array velocities() { return view(live_->particles().velocity, 3); }
-  py::array target_ids() { return view(live_->particles().target, 1); }
-  py::array ids() { return view(live_->particles().id, 1); }
+  py::array positions() { return view(live_->particles().position, 3, "positions"); }
+  py::array velocities() { return view(live_->particles().velocity, 3, "velocities"); }
+  py::array target_ids() { return view(live_->particles().target, 1, "target_ids"); }
+  py::array ids() { return view(live_->particles().id, 1, "ids"); }
 
   /// Copies in id order (the order of the run's PLY frames), stable from frame to frame.
-  py::dict sorted() const {
+  py::dict sorted() {
+    auto lock = guard("sorted");
     std::vector<Vec3f> x, v;
     std::vector<std::uint8_t> t;
     sim::sorted_by_id(live_->particles(), x, v, t);
@@ -122,8 +128,21 @@ class Simulation {
   const pipeline::LiveScene& live() const { return *live_; }
 
  private:
+  /// The simulation for this call, or a RuntimeError while another thread steps it (with the GIL released): a
+  /// blocking wait here would hold the GIL the stepping thread needs to finish.
+  std::unique_lock<std::mutex> guard(const char* what) {
+    std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
+    if (!lock) throw std::runtime_error(fmt::format("Simulation.{}: another thread is stepping this simulation", what));
+    return lock;
+  }
+
   static Vec3f vec3(const py::object& o, const char* what) {
-    const auto s = o.cast<std::vector<float>>();
+    std::vector<float> s;
+    try {
+      s = o.cast<std::vector<float>>();
+    } catch (const py::cast_error&) {
+      raise(param_error(fmt::format("{}: expected 3 numbers", what)));
+    }
     if (s.size() != 3) raise(param_error(fmt::format("{}: expected 3 numbers, got {}", what, s.size())));
     return {s[0], s[1], s[2]};
   }
@@ -148,7 +167,8 @@ class Simulation {
   }
 
   template <class T>
-  py::array view(const std::vector<T>& a, int columns) {
+  py::array view(const std::vector<T>& a, int columns, const char* what) {
+    auto lock = guard(what);
     if (!views_) views_ = std::make_shared<ViewOwner>();
     auto* keep = new std::shared_ptr<ViewOwner>(views_);
     py::capsule base(keep, [](void* p) { delete static_cast<std::shared_ptr<ViewOwner>*>(p); });

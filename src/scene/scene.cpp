@@ -96,10 +96,13 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   s.auto_frames = !given("output", "frames");
   s.auto_fluid = s.fluid.empty() && !s.targets.empty();
   FF_CHECK(s.validate());
-  // The resume hash covers everything that shapes the simulation; the frame count and the limits may change
-  // between runs.
+  // The resume hash covers everything that shapes the simulation; the frame count, the limits and the targets'
+  // tints may change between runs.
   json h = j;
   h.erase("limits");
+  if (h.contains("targets") && h["targets"].is_array())  // a target's tint colours the export only
+    for (auto& t : h["targets"])
+      if (t.is_object()) t.erase("tint");
   if (h.contains("output") && h["output"].is_object()) {
     h["output"].erase("frames");
     if (h["output"].empty()) h.erase("output");
