@@ -14,8 +14,10 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <string>
 #include <utility>
 #include <string_view>
@@ -515,6 +517,31 @@ TEST(LoadMesh, EveryFileOfAssimpsInvalidCorpusGivesAOneLineError) {
       expect_error(r, file, "header declares 353535235358 vertices");
     if (file.filename() == "malformed.obj") expect_error(r, file, "OBJ: Invalid face index");
     if (file.filename().string().starts_with("empty.")) expect_error(r, file, "file is empty");
+  }
+}
+
+// The fuzz target's way in (fuzz/fuzz_mesh.cpp): the same meshes and the same errors as from the files.
+TEST(LoadMesh, FromMemoryAsFromTheFile) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(test::data_dir())) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 10u);
+  for (const fs::path& file : files) {
+    SCOPED_TRACE(file.string());
+    std::ifstream in(file, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto bytes = std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+    MeshLoadStats fs_stats, mem_stats;
+    const auto a = load_mesh(file, {}, &fs_stats);
+    const auto b = load_mesh_from_memory(bytes, file, {}, &mem_stats);
+    ASSERT_EQ(a.has_value(), b.has_value()) << (a ? b.error().message : a.error().message);
+    if (!a) {
+      EXPECT_EQ(a.error().message, b.error().message);
+      continue;
+    }
+    EXPECT_EQ(a->vertices, b->vertices);
+    EXPECT_EQ(a->triangles, b->triangles);
+    EXPECT_EQ(fs_stats.dropped_degenerate, mem_stats.dropped_degenerate);
   }
 }
 

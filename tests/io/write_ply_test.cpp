@@ -55,6 +55,24 @@ TEST(WritePly, MismatchedSizesAndTruncatedFilesAreErrors) {
   EXPECT_FALSE(read_particles_ply(dir / "c.ply").has_value());
 }
 
+TEST(WritePly, DecodedFromMemoryAsFromTheFile) {
+  const auto dir = test::temp_dir("ply-memory");
+  std::vector<Vec3f> x{{1, 2, 3}, {-4, 5.5f, 6}}, v{{0.1f, 0.2f, 0.3f}, {7, 8, 9}};
+  std::vector<std::uint8_t> t{3, 255};
+  const auto bytes = encode_particles_ply(view(x, v, t));
+  ASSERT_TRUE(write_particles_ply(dir / "a.ply", view(x, v, t)).ok());
+  auto m = decode_particles_ply(bytes, "a.ply");
+  auto f = read_particles_ply(dir / "a.ply");
+  ASSERT_TRUE(m && f);
+  EXPECT_EQ(m->positions, f->positions);
+  EXPECT_EQ(m->velocities, f->velocities);
+  EXPECT_EQ(m->targets, t);
+  // A cut file: the same error, naming what stands for the file.
+  auto cut = decode_particles_ply(std::span(bytes).first(bytes.size() - 4), "cut.ply");
+  ASSERT_FALSE(cut.has_value());
+  EXPECT_TRUE(cut.error().message.starts_with("cut.ply: truncated")) << cut.error().message;
+}
+
 TEST(WritePly, UnwritableFolderIsAnErrorNamingThePath) {
   const std::vector<Vec3f> one{{0, 0, 0}};
   auto st = write_particles_ply("/proc/fluidform-nope/a.ply", view(one, {}, {}));
