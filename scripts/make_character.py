@@ -548,6 +548,8 @@ def check(data):
         fails.append(f"indices out of range [0, {len(V)})")
     if J.max() >= nj:
         fails.append(f"JOINTS_0 out of range [0, {nj})")
+    if fails:  # nothing further can be read safely
+        return fails, figs
     if not np.all(np.isfinite(W)) or W.min() < 0:
         fails.append("WEIGHTS_0 not finite and non-negative")
     wsum = W.sum(axis=1)
@@ -668,7 +670,10 @@ def main():
     status = 0
     if args.check:
         with open(args.out, "rb") as f:
-            fails, figs = check(f.read())
+            try:
+                fails, figs = check(f.read())
+            except (ValueError, KeyError, IndexError, struct.error) as e:
+                fails, figs = [f"the file does not read back: {e}"], {}
         info["check"] = "ok" if not fails else "FAILED"
         info.update(figs)
         for msg in fails:
