@@ -1,6 +1,7 @@
 #include "io/write_mesh.h"
 
 #include "io/atomic_file.h"
+#include "io/glb_builder.h"
 
 #include <Eigen/Geometry>  // cross product
 #include <fmt/format.h>
@@ -15,43 +16,10 @@ namespace ff::io {
 namespace {
 
 using nlohmann::json;
-
-// glTF enums (WebGL names).
-constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120;
-constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
-
-/// The binary chunk under construction and the JSON arrays that describe it.
-struct GlbBuilder {
-  std::vector<std::uint8_t> bin;
-  json views = json::array(), accessors = json::array();
-
-  /// Appends `bytes` as one buffer view (4-byte aligned); returns its index.
-  int view(const void* data, std::size_t bytes, int target = 0, int stride = 0) {
-    while (bin.size() % 4) bin.push_back(0);
-    json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
-    if (target) v["target"] = target;
-    if (stride) v["byteStride"] = stride;
-    const auto* p = static_cast<const std::uint8_t*>(data);
-    bin.insert(bin.end(), p, p + bytes);
-    views.push_back(v);
-    return static_cast<int>(views.size()) - 1;
-  }
-  int accessor(int view, int component, std::size_t count, const char* type, json min = nullptr, json max = nullptr,
-               bool normalized = false) {
-    json a = {{"bufferView", view}, {"componentType", component}, {"count", count}, {"type", type}};
-    if (normalized) a["normalized"] = true;
-    if (!min.is_null()) a["min"] = std::move(min), a["max"] = std::move(max);
-    accessors.push_back(a);
-    return static_cast<int>(accessors.size()) - 1;
-  }
-};
-
-template <class T>
-void put(std::vector<std::uint8_t>& out, T v) {
-  std::uint8_t b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  out.insert(out.end(), b, b + sizeof(T));
-}
+// The GLB pieces shared with write_rigged_glb.cpp (io/glb_builder.h).
+using glb::GlbBuilder, glb::put, glb::pack_glb, glb::water_material;
+using glb::kFloat, glb::kUnsignedInt, glb::kUnsignedShort, glb::kShort, glb::kByte, glb::kArrayBuffer,
+    glb::kElementArrayBuffer;
 
 // Snorm encodings of glTF 2.0 (KHR_mesh_quantization): value = max(q / (2ⁿ⁻¹ − 1), −1).
 std::int16_t snorm16(float v) { return static_cast<std::int16_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)); }
@@ -233,49 +201,9 @@ json visibility_animation(GlbBuilder& b, const std::vector<float>& t, const json
   return {{"name", "forming"}, {"channels", channels}, {"samplers", samplers}};
 }
 
-/// The GLB container: header, the JSON chunk (space-padded) and the BIN chunk (zero-padded by the builder).
-Result<std::vector<std::uint8_t>> pack_glb(const json& doc, const std::vector<std::uint8_t>& bin) {
-  std::string text = doc.dump();
-  while (text.size() % 4) text.push_back(' ');
-  const std::size_t total = 12 + 8 + text.size() + 8 + bin.size();
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    return param_error(fmt::format("glb: {} bytes is more than a GLB can hold (4 GiB); mesh fewer frames", total));
-  std::vector<std::uint8_t> out;
-  out.reserve(total);
-  put<std::uint32_t>(out, 0x46546C67u);  // "glTF"
-  put<std::uint32_t>(out, 2);
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(total));
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(text.size()));
-  put<std::uint32_t>(out, 0x4E4F534Au);  // "JSON"
-  out.insert(out.end(), text.begin(), text.end());
-  put<std::uint32_t>(out, static_cast<std::uint32_t>(bin.size()));
-  put<std::uint32_t>(out, 0x004E4942u);  // "BIN\0"
-  out.insert(out.end(), bin.begin(), bin.end());
-  return out;
-}
-
 }  // namespace
 
 namespace {
-
-// The water material (KHR_materials_transmission, _ior, _volume; a closed mesh, so the volume extension's
-// "thickness" is the mesh's own). Base colour white: the tint comes from absorption along the path through the
-// liquid, deeper where it is thicker, as in real water.
-// thicknessFactor is in the mesh's own coordinates, attenuationDistance in the world's: a quantized mesh lives in
-// [-1, 1]³ under a node scaled by its half-extent, so its thickness is a quarter of that cube's diagonal.
-json water_material(const WaterMaterial& w, const Aabb& box, bool quantized, const std::string& name = "water") {
-  const Vec3f ext = box.max - box.min;
-  const float size = ext.allFinite() && ext.minCoeff() >= 0.0f && ext.norm() > 0.0f ? ext.norm() : 1.0f;
-  const float distance = w.attenuation_distance > 0.0f ? w.attenuation_distance : 0.5f * size;
-  const float thickness = 0.25f * (quantized ? 2.0f * std::sqrt(3.0f) : size);
-  return {{"name", name},
-          {"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", w.roughness}}},
-          {"extensions",
-           {{"KHR_materials_transmission", {{"transmissionFactor", 1.0}}},
-            {"KHR_materials_ior", {{"ior", w.ior}}},
-            {"KHR_materials_volume",
-             {{"thicknessFactor", thickness}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
-}
 
 json glb_materials(const GlbOptions& o, const Aabb& box) {
   if (o.materials.empty()) return json::array({water_material(o.material, box, o.quantize)});
@@ -357,7 +285,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"accessors", b.accessors}};
   if (!meshes.empty()) doc["meshes"] = meshes;
   if (!animation.is_null()) doc["animations"] = json::array({animation});
-  doc["extensionsUsed"] = {"KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"};
+  doc["extensionsUsed"] = glb::water_extensions();
   if (o.quantize && !meshes.empty()) {
     doc["extensionsUsed"].push_back("KHR_mesh_quantization");
     doc["extensionsRequired"] = {"KHR_mesh_quantization"};
