@@ -15,6 +15,7 @@ struct CompareCli {
   pipeline::CompareOptions compare;
   std::string controllers;  // comma-separated; empty = every registered controller
   int frames = 0;
+  double max_memory = 0.0;
 };
 
 int run_compare(CompareCli& o) {
@@ -25,6 +26,7 @@ int run_compare(CompareCli& o) {
     o.compare.controllers = std::move(*names);
   }
   if (o.frames > 0) o.compare.frames = o.frames;
+  if (o.max_memory > 0.0) o.compare.max_memory_mib = o.max_memory;
   auto table = pipeline::run_compare(o.compare);
   if (!table) return fail(table.error());
   fmt::print(stdout, "{}", pipeline::table_markdown(*table));
@@ -47,6 +49,9 @@ Command add_compare(CLI::App& app) {
                       fmt::format("output frames per controller (default: the scene's output.frames, else {})",
                                   pipeline::kDefaultCompareFrames))
       ->check(CLI::Range(1, 10'000'000));
+  compare->add_option("--max-memory", o->max_memory,
+                      "MiB each run may need, estimated before anything runs (overrides limits.max_memory_mb)")
+      ->check(CLI::Range(1.0, 1e9));
   compare->footer(pipeline::controllers_help());
   return {compare, [o] { return run_compare(*o); }};
 }

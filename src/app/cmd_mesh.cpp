@@ -83,6 +83,9 @@ Command add_mesh(CLI::App& app) {
                    "iso-surface extraction: mc (marching cubes) or rmt (regularised marching tetrahedra)")
       ->capture_default_str();
   mesh->add_option("--fps", o->mesh.fps, "frames per second of the animation")->capture_default_str();
+  mesh->add_option("--max-memory", o->mesh.max_memory_mib,
+                   "MiB one frame's field grid may need, checked before it is filled (default: 80 % of the machine's)")
+      ->check(CLI::Range(1.0, 1e9));
   mesh->add_flag("--no-glb", o->no_glb, "do not write animation.glb");
   mesh->add_flag("--no-pc2", o->no_pc2, "do not write particles.pc2 / particles_frame0.ply");
   mesh->add_flag("--no-frames", o->no_frames, "do not write mesh/frame_NNNNN.obj");

@@ -16,11 +16,13 @@ struct ServeCli {
   server::ServeOptions serve;
   std::string controller;
   bool as_fast_as_possible = false;
+  double max_memory = 0.0;
 };
 
 int run_serve(ServeCli& o) {
   if (!o.controller.empty()) o.serve.controller = o.controller;
   o.serve.realtime = !o.as_fast_as_possible;
+  if (o.max_memory > 0.0) o.serve.max_memory_mib = o.max_memory;
   if (!fs::exists(o.serve.input))
     return fail(input_error(fmt::format("{}: no such scene file or run folder", o.serve.input.string())));
   ProgressBar bar(stderr);
@@ -51,6 +53,9 @@ Command add_serve(CLI::App& app) {
                   "simulate as fast as the machine can (default: at most real time)");
   serve->add_option("--max-fps", o->serve.max_fps,
                     "at most this many simulated frames per second of wall time (default 0: no cap)");
+  serve->add_option("--max-memory", o->max_memory,
+                    "MiB the live scene may need, estimated before it starts (overrides limits.max_memory_mb)")
+      ->check(CLI::Range(1.0, 1e9));
   return {serve, [o] { return run_serve(*o); }};
 }
 

@@ -14,15 +14,6 @@
 namespace ff::metrics {
 namespace {
 
-// The SDF grid resolution: half the control spacing (as the sampler's grid, so thin parts the samples
-// reach are resolved), coarser when the box would need more than ~64 M nodes (256 MiB).
-float sdf_spacing(const Aabb& box, float margin, float d) {
-  const Vec3f size = box.size() + Vec3f::Constant(2.0f * margin);
-  float s = 0.5f * d;
-  while (double(size.x() / s) * double(size.y() / s) * double(size.z() / s) > 64e6) s *= 1.25f;
-  return s;
-}
-
 // Queries per work item. Work is handed out dynamically: queries that fall back to a tree (splashed
 // particles, holes) cluster in index ranges and cost ~10× a grid answer. Each item writes only its own slots,
 // so the results do not depend on who runs it.
@@ -56,7 +47,7 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
 
   FF_TRY(sampling::MeshField field, sampling::MeshField::build(mesh));
   const float margin = 3.0f * d;
-  FF_TRY(sampling::SdfGrid grid, sampling::SdfGrid::build(field, sdf_spacing(field.bounds(), margin, d), margin));
+  FF_TRY(sampling::SdfGrid grid, sampling::SdfGrid::build(field, sampling::auto_sdf_spacing(field.bounds(), margin, d), margin));
   sampling::ignore_hidden_surfaces(grid);
 
   TargetShape shape;

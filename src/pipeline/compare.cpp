@@ -1,5 +1,8 @@
 #include "pipeline/compare.h"
 
+#include "pipeline/auto_scene.h"
+#include "pipeline/run_budget.h"
+
 #include "metrics/report.h"
 
 #include "control/registry.h"
@@ -133,6 +136,7 @@ std::string blow_up_reason(const ChildExit& ended, const json& report, const fs:
 struct RunSetup {
   fs::path exe, scene;
   int frames = 0;
+  std::optional<double> max_memory_mib;  // passed on to every run
 };
 
 // Runs one controller in its own process into `dir` and reads its row from report.json and metrics.csv.
@@ -145,9 +149,10 @@ Result<CompareRow> run_controller(const RunSetup& setup, const control::Controll
   fs::remove_all(dir, ec);
   if (ec) return io_error(fmt::format("{}: cannot clear: {}", dir.string(), ec.message()));
   FF_CHECK(io::ensure_writable_dir(dir));
-  const std::vector<std::string> argv{setup.exe.string(), "-q", "run", setup.scene.string(), "--controller",
+  std::vector<std::string> argv{setup.exe.string(), "-q", "run", setup.scene.string(), "--controller",
                                       row.controller, "-o", dir.string(), "--no-mesh", "--frames",
                                       std::to_string(setup.frames)};
+  if (setup.max_memory_mib) argv.insert(argv.end(), {"--max-memory", fmt::format("{}", *setup.max_memory_mib)});
   const auto start = std::chrono::steady_clock::now();
   FF_TRY(const ChildExit ended, run_child(argv, "/dev/null", dir / "stderr.log"));
   row.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -409,6 +414,17 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
     return input_error(fmt::format("{}: the scene has no targets, so there is no shape to compare controllers on",
                                    o.scene_file.string()));
   FF_CHECK(check_meshes(scene));
+  {
+    // The memory one run will need (each controller runs alone), checked as `run` checks it: a scene too large for
+    // the machine fails here with one line, not once per controller after the others have run.
+    FF_TRY(auto geometry, load_target_meshes(scene));
+    scene::Scene completed = scene;
+    FF_CHECK(complete_scene(completed, geometry));
+    FF_TRY(const RunEstimate estimate, check_run_budget(completed, geometry, o.max_memory_mib));
+    if (estimate.large)
+      spdlog::warn("a large scene: about {} fluid particles and {} control samples, ~{:.0f} MiB per run (limit {:.0f} "
+                   "MiB)", estimate.fluid_particles, estimate.control_samples, estimate.memory_mib, estimate.limit_mib);
+  }
   // Every controller runs the same length: "until formed" would stop each at a different frame.
   const int frames = o.frames.value_or(scene.auto_frames ? kDefaultCompareFrames : scene.output.frames);
   if (!(frames >= 1 && frames <= 10'000'000)) return param_error(fmt::format("--frames = {} is outside [1, 10000000]", frames));
@@ -422,7 +438,7 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   table.fps = scene.output.fps;
   table.threads = core::thread_count();
   table.cpu = cpu_model();
-  const RunSetup setup{exe, fs::absolute(o.scene_file), frames};
+  const RunSetup setup{exe, fs::absolute(o.scene_file), frames, o.max_memory_mib};
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const auto& e = *entries[k];
     spdlog::info("compare [{}/{}] {}: {} frames ...", k + 1, entries.size(), e.name, frames);

@@ -21,6 +21,7 @@ struct CompareOptions {
   std::vector<std::string> controllers;  ///< empty: every registered controller, in registry order
   std::optional<int> frames;             ///< default: the scene's output.frames if it sets it, else kDefaultFrames
   std::filesystem::path exe;             ///< the fluidform binary; empty: /proc/self/exe
+  std::optional<double> max_memory_mib;  ///< --max-memory: overrides scene.limits.max_memory_mb, for every run
 };
 
 /// Run length when neither --frames nor the scene's output.frames says: 5 s at 60 fps. A scene without

@@ -1,5 +1,6 @@
 #include "pipeline/live_scene.h"
 
+#include "pipeline/run_budget.h"
 #include "pipeline/target_cache.h"
 #include "control/steering.h"
 #include "core/timer.h"
@@ -25,6 +26,11 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
   FF_TRY(s->geometry_, load_target_meshes(s->scene_));
   FF_CHECK(complete_scene(s->scene_, s->geometry_));
+  // The memory it will need, checked (as `run` does) before the fluid, the samples or any grid is allocated.
+  FF_TRY(const RunEstimate estimate, check_run_budget(s->scene_, s->geometry_, options.max_memory_mib));
+  if (estimate.large)
+    spdlog::warn("a large scene: about {} fluid particles and {} control samples, ~{:.0f} MiB (limit {:.0f} MiB)",
+                 estimate.fluid_particles, estimate.control_samples, estimate.memory_mib, estimate.limit_mib);
   FF_CHECK(sim::fill_sources(s->scene_.fluid, s->scene_.domain, s->scene_.solver.particle_radius, s->initial_));
   assign_targets(s->initial_, s->geometry_);
   if (s->initial_.size() == 0) return input_error("the scene creates no fluid particles");

@@ -26,6 +26,7 @@ struct LiveOptions {
   std::filesystem::path cache_dir = "fluidform-out/cache";  ///< control-particle cache (shared with `run`'s default)
   std::optional<std::string> controller;                    ///< overrides scene.controller.name
   std::vector<std::filesystem::path> extra_meshes;          ///< more meshes for the swap list (sampled when chosen)
+  std::optional<double> max_memory_mib;                     ///< --max-memory: overrides scene.limits.max_memory_mb
 };
 
 /// What one step reports (the viewer's HUD).

@@ -47,6 +47,8 @@ Status MeshOptions::validate() const {
   if (!(spacing >= 0.0f) || !std::isfinite(spacing)) return param_error(fmt::format("mesh: spacing {} must be ≥ 0", spacing));
   if (every < 1) return param_error(fmt::format("mesh: --every {} must be ≥ 1", every));
   if (!(fps > 0.0) || !std::isfinite(fps)) return param_error(fmt::format("mesh: fps {} must be > 0", fps));
+  if (!(max_memory_mib >= 0.0 && max_memory_mib <= 1e9))
+    return param_error(fmt::format("mesh: --max-memory {} must be in [1, 1e9] MiB", max_memory_mib));
   return {};
 }
 
@@ -159,7 +161,7 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
     if (cancelled.load()) continue;
     const fs::path& file = frames[chosen[c]];
     auto f = io::read_particles_ply(file);
-    Result<io::TriangleMesh> mesh = f ? surface::reconstruct(f->positions, d, o.params, &stats[c]) : Result<io::TriangleMesh>(f.error());
+    Result<io::TriangleMesh> mesh = f ? surface::reconstruct(f->positions, d, o.params, &stats[c], o.max_memory_mib) : Result<io::TriangleMesh>(f.error());
     if (!mesh) {
       failed[c] = 1;
       errors[c] = Error{mesh.error().kind, fmt::format("{}: {}", file.string(), mesh.error().message)};

@@ -35,6 +35,7 @@ struct MeshOptions {
   /// per target, each triangle of a frame getting the material of the target of the particle nearest to it.
   std::vector<Vec3f> target_tints;
   double fps = 60.0;        ///< frame rate of the animation and the cache
+  double max_memory_mib = 0.0;  ///< bound on one frame's field grid (surface::reconstruct); 0: 80 % of the machine's
 
   Status validate() const;
 };

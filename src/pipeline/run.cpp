@@ -382,6 +382,7 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   mo.spacing = scene.solver.spacing();
   mo.fps = scene.output.fps;
   mo.vdb = opt.vdb;
+  mo.max_memory_mib = memory_limit_mib(scene, opt.max_memory_mib);
   for (const auto& t : scene.targets) mo.target_tints.push_back(t.tint);
   if (opt.mesh_every > 0) {
     mo.every = opt.mesh_every;

@@ -2,6 +2,7 @@
 
 #include "core/memory.h"
 #include "sampling/samplers.h"
+#include "sampling/sdf_grid.h"
 #include "sim/emitter.h"
 
 #include <fmt/format.h>
@@ -15,6 +16,7 @@ nlohmann::json RunEstimate::to_json() const {
   return {{"fluid_particles", fluid_particles},
           {"control_samples", control_samples},
           {"memory_mib", std::round(memory_mib)},
+          {"sdf_grids_mib", std::round(sdf_mib)},
           {"memory_limit_mib", std::round(limit_mib)}};
 }
 
@@ -26,7 +28,19 @@ RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeom
   double samples = 0.0;
   for (const auto& t : targets) samples += sampling::estimate_sample_count(t.volume > 0.0, t.volume, t.area, dc);
   e.control_samples = static_cast<std::size_t>(std::min(samples, 1e18));
-  e.memory_mib = kBaseMib + (kFluidKib * double(e.fluid_particles) + kSampleKib * samples) / 1024.0;
+  // The targets' SDF grids (sampling/sdf_grid.h, at most kAutoSdfNodes nodes each): the metrics keep one per target
+  // for the run (4 bytes a node), and sampling builds one at a time (16 bytes a node at the peak of its build).
+  // Next to the samples they are small for a solid (~20 nodes per sample); for a thin shape in a large box, or
+  // a sheet, they are most of the memory.
+  double sdf_bytes = 0.0, sdf_build_peak = 0.0;
+  for (const auto& t : targets) {
+    const float metric_margin = 3.0f * d, sample_margin = 2.0f * dc;
+    sdf_bytes += 4.0 * sampling::sdf_node_count(t.box, sampling::auto_sdf_spacing(t.box, metric_margin, d), metric_margin);
+    sdf_build_peak = std::max(
+        sdf_build_peak, 16.0 * sampling::sdf_node_count(t.box, sampling::auto_sdf_spacing(t.box, sample_margin, dc), sample_margin));
+  }
+  e.sdf_mib = (sdf_bytes + sdf_build_peak) / (1024.0 * 1024.0);
+  e.memory_mib = kBaseMib + (kFluidKib * double(e.fluid_particles) + kSampleKib * samples) / 1024.0 + e.sdf_mib;
   // A million particles or a few GiB: minutes per frame on a laptop, worth saying before it starts.
   e.large = e.fluid_particles + e.control_samples > 1'000'000 || e.memory_mib > 4096.0;
   return e;
@@ -45,10 +59,10 @@ Result<RunEstimate> check_run_budget(const scene::Scene& scene, const std::vecto
   e.limit_mib = memory_limit_mib(scene, override_mib);
   if (e.memory_mib > e.limit_mib)
     return param_error(fmt::format(
-        "the run would need about {:.0f} MiB ({} fluid particles, {} control samples at spacing {:g} m), more than the "
-        "limit of {:.0f} MiB; increase solver.particle_radius, shrink the fluid, or raise limits.max_memory_mb / "
-        "--max-memory",
-        e.memory_mib, e.fluid_particles, e.control_samples, scene.solver.spacing(), e.limit_mib));
+        "the run would need about {:.0f} MiB ({} fluid particles, {} control samples at spacing {:g} m, {:.0f} MiB of "
+        "SDF grids), more than the limit of {:.0f} MiB; increase solver.particle_radius, shrink the fluid, or raise "
+        "limits.max_memory_mb / --max-memory",
+        e.memory_mib, e.fluid_particles, e.control_samples, scene.solver.spacing(), e.sdf_mib, e.limit_mib));
   return e;
 }
 

@@ -17,6 +17,7 @@ namespace ff::pipeline {
 struct RunEstimate {
   std::size_t fluid_particles = 0;   ///< from the fluid sources on the lattice (sim::estimate_particle_count)
   std::size_t control_samples = 0;   ///< the targets' volume (or area, for sheets) at the sampling spacing
+  double sdf_mib = 0.0;              ///< of which the targets' SDF grids
   double memory_mib = 0.0;           ///< estimated peak resident memory
   double limit_mib = 0.0;            ///< the limit it was checked against
   bool large = false;                ///< worth a word before the run starts

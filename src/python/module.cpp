@@ -177,7 +177,11 @@ py::dict run(const py::object& scene_arg, const std::string& out, std::optional<
   opt.mesh_every = mesh_every;
   opt.vdb = vdb;
   opt.resume = resume;
-  if (max_memory) opt.max_memory_mib = max_memory;
+  if (max_memory) {
+    if (!(*max_memory >= 1.0 && *max_memory <= 1e9))
+      raise(param_error(fmt::format("max_memory = {} is outside [1, 1e9] MiB", *max_memory)));
+    opt.max_memory_mib = max_memory;
+  }
   PyProgress bar(progress);
   auto sum = [&] {
     py::gil_scoped_release nogil;

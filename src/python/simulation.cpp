@@ -26,11 +26,16 @@ struct ViewOwner {
 class Simulation {
  public:
   Simulation(const py::object& scene_arg, std::optional<std::string> controller, std::optional<std::string> cache_dir,
-             const py::object& progress) {
+             std::optional<double> max_memory, const py::object& progress) {
     const scene::Scene scene = load_scene_argument(scene_arg);
     pipeline::LiveOptions opt;
     opt.controller = std::move(controller);
     if (cache_dir) opt.cache_dir = *cache_dir;
+    if (max_memory) {
+      if (!(*max_memory >= 1.0 && *max_memory <= 1e9))
+        raise(param_error(fmt::format("max_memory = {} is outside [1, 1e9] MiB", *max_memory)));
+      opt.max_memory_mib = max_memory;
+    }
     PyProgress bar(progress);
     auto live = [&] {
       py::gil_scoped_release nogil;
@@ -198,11 +203,13 @@ gives the run's frames. positions, velocities, target_ids and ids are read-only 
 without a copy, in the solver's order (it sorts particles spatially between frames; ids names each row). A view
 stays valid and unchanged after later steps (the solver then goes on with a copy). sorted() gives copies in id
 order, the order of the run's particle frames.)")
-      .def(py::init<const py::object&, std::optional<std::string>, std::optional<std::string>, const py::object&>(),
+      .def(py::init<const py::object&, std::optional<std::string>, std::optional<std::string>, std::optional<double>,
+                    const py::object&>(),
            py::arg("scene"), py::kw_only(), py::arg("controller") = py::none(), py::arg("cache_dir") = py::none(),
-           py::arg("progress") = py::none(),
+           py::arg("max_memory") = py::none(), py::arg("progress") = py::none(),
            "scene: a scene file path or a dict of scene keys; controller overrides the scene's; cache_dir holds the "
-           "control-sample cache (default fluidform-out/cache, as a run's); progress: callback(what, done, total).")
+           "control-sample cache (default fluidform-out/cache, as a run's); max_memory: MiB the scene may need, checked "
+           "before anything is allocated (as run's); progress: callback(what, done, total).")
       .def("step", &Simulation::step, py::arg("frames") = 1, py::kw_only(), py::arg("metrics") = true,
            "Advances `frames` frames of 1/fps s; returns the last frame's shape metrics (measured on the last frame "
            "only; metrics=False skips them, NaN) and the solver's wall time of the steps (step_seconds).")

@@ -413,4 +413,15 @@ Vec3f SdfGrid::project_to_surface(const Vec3f& p) const {
   return x;
 }
 
+float auto_sdf_spacing(const Aabb& box, float margin, float d) {
+  float s = 0.5f * d;
+  while (sdf_node_count(box, s, margin) > kAutoSdfNodes) s *= 1.25f;
+  return s;
+}
+
+double sdf_node_count(const Aabb& box, float spacing, float margin) {
+  const Vec3f size = box.size() + Vec3f::Constant(2.0f * margin);
+  return double(size.x() / spacing) * double(size.y() / spacing) * double(size.z() / spacing);
+}
+
 }  // namespace ff::sampling

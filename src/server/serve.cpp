@@ -389,6 +389,7 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
     lo.cache_dir = opt.cache_dir;
     lo.controller = opt.controller;
     lo.extra_meshes = opt.meshes;
+    lo.max_memory_mib = opt.max_memory_mib;
     FF_TRY(live, pipeline::LiveScene::create(scene, lo, progress));
     spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
     sh.set_hello(live_hello(*live, false, false));

@@ -25,6 +25,7 @@ struct ServeOptions {
   double max_fps = 0.0;          ///< cap on simulated frames per second of wall time (0: none), to share a machine
                                  ///< or make the simulation slower than the display on purpose (the viewer's tests)
   double exit_after = 0.0;       ///< s of wall time, then a clean exit (0: until Ctrl-C); for scripts and tests
+  std::optional<double> max_memory_mib;  ///< --max-memory: overrides the scene's limits.max_memory_mb (live mode)
   Status validate() const;
 };
 

@@ -17,7 +17,7 @@
 namespace ff::surface {
 
 Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params,
-                                     SurfaceStats* stats) {
+                                     SurfaceStats* stats, double max_memory_mib) {
   SurfaceStats st;
   st.particles = particles.size();
   FF_CHECK(params.validate());
@@ -32,7 +32,7 @@ Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spa
 
   // --- field and extraction (marching cubes, or the tetrahedra of RMT) -------------------------------------------
   core::Stopwatch watch;
-  FF_TRY(SparseField field, sparse_field(particles, spacing, params));
+  FF_TRY(SparseField field, sparse_field(particles, spacing, params, max_memory_mib));
   st.t_field = watch.seconds();
   st.candidate_blocks = field.candidate_blocks;
   st.surface_blocks = field.keys.size();

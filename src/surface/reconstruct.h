@@ -52,7 +52,8 @@ struct SurfaceStats {
 /// Errors: Input for no particles or a non-finite coordinate (naming the first such particle); Param for a
 /// spacing that is not finite and > 0, invalid params or a cloud too large for the grid; Numerical if the
 /// extraction (marching cubes or tetrahedra) itself fails the mesh check (an internal error).
+/// max_memory_mib bounds the field grid's memory (sparse_field; 0: 80 % of the machine's).
 Result<io::TriangleMesh> reconstruct(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params,
-                                     SurfaceStats* stats = nullptr);
+                                     SurfaceStats* stats = nullptr, double max_memory_mib = 0.0);
 
 }  // namespace ff::surface

@@ -1,5 +1,7 @@
 #include "surface/sparse_field.h"
 
+#include "core/memory.h"
+
 #include "core/parallel.h"
 #include "surface/block_loop.h"
 
@@ -243,7 +245,8 @@ void splat_particle(const Splat& k, float px, float py, float pz, int sx, int sy
 
 }  // namespace
 
-Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params) {
+Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params,
+                                 double max_memory_mib) {
   SparseField field;
   FF_CHECK(frame_grid(particles, spacing, params, field));
   const Binned bins = bin_particles(particles, field);
@@ -252,6 +255,19 @@ Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing
   if (candidates.size() > params.max_blocks)
     return param_error(
         fmt::format("surface: {} grid blocks needed, more than max_blocks = {}", candidates.size(), params.max_blocks));
+  // The worst case: every candidate block kept (its 9³ values, its key, its slot), before any is evaluated.
+  const double block_bytes = sizeof(float) * SparseField::kNodesPerBlock + sizeof(std::vector<float>) + 2 * sizeof(std::uint64_t) + sizeof(float);
+  const double need_mib = double(candidates.size()) * block_bytes / (1024.0 * 1024.0);
+  double limit_mib = max_memory_mib;
+  if (!(limit_mib > 0.0)) {
+    const double machine = core::machine_memory_mib();
+    limit_mib = machine > 0.0 ? 0.8 * machine : 16384.0;
+  }
+  if (need_mib > limit_mib)
+    return param_error(fmt::format(
+        "surface: the grid could need {:.0f} MiB ({} blocks of {}³ cells of {:.4g} m), more than the limit of {:.0f} MiB; "
+        "raise surface.cell_size, or limits.max_memory_mb / --max-memory",
+        need_mib, candidates.size(), kB, field.cell, limit_mib));
 
   // Evaluate each candidate block; keep it when the surface passes through it.
   const double d = spacing;

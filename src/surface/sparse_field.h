@@ -86,6 +86,9 @@ struct SparseField {
 /// φ of `particles` (m) at fluid spacing `spacing` (d, m) with the field part of `params`.
 /// Preconditions (checked by reconstruct()): particles non-empty and finite, spacing > 0, params valid.
 /// Errors: Param when the particles span more blocks than params.max_blocks or than a 64-bit key can index.
-Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params);
+/// `max_memory_mib` bounds the blocks' memory (every candidate block counted as kept: the worst case), checked
+/// before any block is evaluated; 0: 80 % of the machine's memory.
+Result<SparseField> sparse_field(std::span<const Vec3f> particles, float spacing, const SurfaceParams& params,
+                                 double max_memory_mib = 0.0);
 
 }  // namespace ff::surface

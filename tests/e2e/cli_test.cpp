@@ -209,6 +209,12 @@ TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
        {"run", "{scene}", "-o", "{out}"}, 2, "targets[0].scale"},
       {"over the memory budget", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--max-memory", "1"}, 2,
        "more than the limit of 1 MiB"},
+      {"compare over the memory budget",
+       "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "tetra.obj").string() + "\"}]}",
+       {"compare", "{scene}", "-o", "{out}", "--controllers", "pbfc", "--max-memory", "1"}, 2, "more than the limit of 1 MiB"},
+      {"serve over the memory budget",
+       "{\"targets\":[{\"mesh\":\"" + (test::data_dir() / "tetra.obj").string() + "\"}]}",
+       {"serve", "{scene}", "--port", "0", "--cache", "{out}", "--max-memory", "1"}, 2, "more than the limit of 1 MiB"},
       {"unknown option", "", {"run", "x.json", "--bogus"}, 2, "bogus"},
       {"frames zero", "{" + fluid + "}", {"run", "{scene}", "-o", "{out}", "--frames", "0"}, 2, "frames"},
       {"no scene argument", "", {"run"}, 2, "scene"},
@@ -236,6 +242,10 @@ TEST(Cli, EveryBadInputExitsNonZeroWithOneLineAndNoPartialOutput) {
     EXPECT_EQ(r.err.rfind("fluidform: error: ", 0), 0u) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.must_contain), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(out / "particles" / "frame_00001.ply")) << c.name;
+    // compare and serve check everything before they write: not even their folders are made.
+    if (c.args[0] == "compare" || c.args[0] == "serve") {
+      EXPECT_FALSE(fs::exists(out)) << c.name;
+    }
     expect_no_temp_files(sub);
   }
 }

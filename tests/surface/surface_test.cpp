@@ -456,5 +456,23 @@ TEST(SparseField, KeepsOnlyBlocksTheSurfacePassesThrough) {
   EXPECT_NEAR(f->max_value, 1.0f, 0.05f);
 }
 
+TEST(SparseField, AMemoryLimitBelowTheGridIsRefusedBeforeAnyBlockIsFilled) {
+  const Shape s = sphere_shape();
+  auto all = sparse_field(s.particles, kD, SurfaceParams{});
+  ASSERT_TRUE(all.has_value());
+  // The worst case (every candidate kept, 9³ floats and its bookkeeping each) just over and just under the limit.
+  const double need_mib = double(all->candidate_blocks) * (4.0 * SparseField::kNodesPerBlock) / (1024.0 * 1024.0);
+  auto refused = sparse_field(s.particles, kD, SurfaceParams{}, 0.9 * need_mib);
+  ASSERT_FALSE(refused.has_value());
+  EXPECT_EQ(refused.error().kind, Error::Kind::Param);
+  const std::string& m = refused.error().message;
+  EXPECT_NE(m.find(std::to_string(all->candidate_blocks) + " blocks"), std::string::npos) << m;
+  EXPECT_NE(m.find("--max-memory"), std::string::npos) << m;
+  EXPECT_NE(m.find("surface.cell_size"), std::string::npos) << m;
+  EXPECT_TRUE(sparse_field(s.particles, kD, SurfaceParams{}, 1.2 * need_mib).has_value());
+  // Through reconstruct, the same.
+  EXPECT_FALSE(reconstruct(s.particles, kD, SurfaceParams{}, nullptr, 0.9 * need_mib).has_value());
+}
+
 }  // namespace
 }  // namespace ff::surface
