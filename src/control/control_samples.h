@@ -5,11 +5,14 @@
 // the boundary normals of eq. 16. `adaptive` and every baseline hold one, so they see the same samples at the same
 // pose and accept and reject the same scenes (validate_control_targets).
 #include "control/control_targets.h"
+#include "control/skinning.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "core/types.h"
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -56,6 +59,14 @@ class ControlSamples {
   std::vector<std::size_t> current_;             // per target: the phase in use
   std::vector<double> start_;
   std::vector<TargetMotion> motion_;
+  std::vector<std::shared_ptr<const TargetSkin>> skin_;  // per target, null: not skinned
+  std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> target_joints_;  // per target, per sample
+  std::vector<std::vector<std::array<float, io::kMaxInfluences>>> target_weights_;
+  // Flattened like position: each sample's influences (zero weights for samples of unskinned targets or phases).
+  std::vector<std::array<std::uint16_t, io::kMaxInfluences>> joints_;
+  std::vector<std::array<float, io::kMaxInfluences>> weights_;
+  std::vector<std::uint8_t> skinned_;  // per flattened sample: its target's current phase is skinned
+  std::vector<PosedJoints> now_joints_, next_joints_;  // per target, scratch of pose()
   bool moving_ = false;
   double time_ = 0.0;
   std::vector<Vec3f> rest_position_, rest_normal_;  // the rest pose of position and normal (moving targets)

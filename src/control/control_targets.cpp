@@ -25,6 +25,21 @@ Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targe
     c.start.push_back(targets[t].start);
     c.motion.push_back(targets[t].motion);
     c.moving = c.moving || targets[t].motion.moving();
+    if (const auto& sk = targets[t].skin) {
+      const std::size_t n = targets[t].set.size();
+      if (targets[t].skin_joints.size() != n || targets[t].skin_weights.size() != n)
+        return param_error(fmt::format("targets[{}]: skin weights for {} of {} control samples", t,
+                                       targets[t].skin_joints.size(), n));
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < io::kMaxInfluences; ++k)
+          if (targets[t].skin_weights[i][k] != 0.0f && targets[t].skin_joints[i][k] >= sk->skin.joint_nodes.size())
+            return param_error(fmt::format("targets[{}]: control sample {} names joint {} of {}", t, i,
+                                           targets[t].skin_joints[i][k], sk->skin.joint_nodes.size()));
+      c.moving = true;
+    }
+    c.skin.push_back(targets[t].skin);
+    c.skin_joints.push_back(std::move(targets[t].skin_joints));
+    c.skin_weights.push_back(std::move(targets[t].skin_weights));
     std::vector<TargetPhase> phases;
     phases.push_back({-INFINITY, std::move(targets[t].set)});
     double last = -INFINITY;

@@ -2,10 +2,12 @@
 // What every controller checks and keeps of its targets: the samples present and weighted, one support H_c for
 // all (they are sampled at one spacing), mesh swaps at increasing times, valid keyframes. Shared by `adaptive`
 // and the baselines so that they accept and reject exactly the same scenes.
+#include "control/skinning.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "sampling/control_set.h"
 
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -18,6 +20,11 @@ struct ControlTarget {
   TargetMotion motion;       ///< keyframes (none: static)
   /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
   std::vector<std::pair<double, sampling::ControlSet>> swaps;
+  /// A skinned, animated target (control/skinning.h): its skin, and the weights of every sample of `set` (the
+  /// first phase; swapped-in meshes are not skinned). Null: posed by `motion` alone.
+  std::shared_ptr<const TargetSkin> skin;
+  std::vector<std::array<std::uint16_t, io::kMaxInfluences>> skin_joints;
+  std::vector<std::array<float, io::kMaxInfluences>> skin_weights;
 };
 
 /// One of a target's sample sets and the time from which it is in use (the first: −∞).
@@ -31,7 +38,10 @@ struct CheckedTargets {
   std::vector<std::vector<TargetPhase>> phases;    ///< per target, in time order
   std::vector<double> start;                       ///< per target, s
   std::vector<TargetMotion> motion;                ///< per target
-  bool moving = false;                             ///< any target keyframed
+  std::vector<std::shared_ptr<const TargetSkin>> skin;  ///< per target (null: not skinned)
+  std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> skin_joints;  ///< per target, per sample
+  std::vector<std::vector<std::array<float, io::kMaxInfluences>>> skin_weights;
+  bool moving = false;                             ///< any target keyframed or skinned
 };
 
 /// Errors name `who` (the controller) and the target.

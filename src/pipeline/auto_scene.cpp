@@ -1,5 +1,7 @@
 #include "pipeline/auto_scene.h"
 
+#include "io/skin.h"
+
 #include "io/load_mesh.h"
 #include "sampling/mesh_field.h"
 #include "sampling/samplers.h"
@@ -13,6 +15,28 @@
 #include <numeric>
 
 namespace ff::pipeline {
+
+Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene::TargetSpec& spec, const io::TriangleMesh& mesh,
+                                                                    std::size_t i) {
+  const auto fail = [&](const Error& e) { return Error{e.kind, fmt::format("targets[{}].animation: {}", i, e.message)}; };
+  auto loaded = io::load_skin(spec.mesh, mesh, spec.transform);
+  if (!loaded) return fail(loaded.error());
+  if (!loaded->has_value())
+    return fail(input_error(fmt::format("{} has no skin (no bones), so it has no clip '{}' to play",
+                                        spec.mesh.filename().string(), spec.animation.clip)));
+  auto skin = std::make_shared<control::TargetSkin>();
+  skin->skin = std::move(**loaded);
+  auto clip = skin->skin.find_clip(spec.animation.clip);
+  if (!clip) return fail(Error{clip.error().kind, fmt::format("{}: {}", spec.mesh.filename().string(), clip.error().message)});
+  skin->clip = static_cast<int>(*clip);
+  skin->transform = io::transform_matrix(spec.transform);
+  skin->spec = spec.animation;
+  for (const auto& w : skin->skin.warnings) spdlog::warn("target {}: {}", i, w);
+  const auto& c = skin->skin.clips[*clip];
+  spdlog::info("target {}: skinned, {} joints, clip '{}' ({:.3g} s, {} channels{})", i, skin->skin.joint_nodes.size(),
+               c.name, c.duration, c.channels.size(), spec.animation.loop ? ", looped" : "");
+  return std::shared_ptr<const control::TargetSkin>(std::move(skin));
+}
 
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene) {
   std::vector<TargetGeometry> out;
@@ -29,6 +53,9 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
     g.volume = field->encloses_volume() ? field->volume() : 0.0;
     g.area = field->area();
     g.box = field->bounds();
+    if (scene.targets[i].animation.active()) {
+      FF_TRY(g.skin, load_target_skin(scene.targets[i], *mesh, i));
+    }
     g.mesh = std::move(*mesh);
     g.field = std::move(*field);
     out.push_back(std::move(g));

@@ -7,12 +7,14 @@
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
 //                     target, so the formed shape is held by the control, not by the floor.
 // Mesh units are metres whatever the model's size. Given keys are never overridden.
+#include "control/skinning.h"
 #include "core/error.h"
 #include "scene/scene.h"
 #include "io/triangle_mesh.h"
 #include "sampling/mesh_field.h"
 #include "sim/particle_set.h"
 
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -25,9 +27,16 @@ struct TargetGeometry {
   double volume = 0.0;  ///< m³ (0 for an open sheet)
   double area = 0.0;    ///< m²
   Aabb box;
+  /// The skin of a target whose scene gives it an animation clip (io/skin.h; the clip found): null otherwise.
+  std::shared_ptr<const control::TargetSkin> skin;
 };
 
-/// Loads every target with its transform. Errors name the target.
+/// The skin of a target with an animation clip, for `mesh` (load_mesh's, the target's transform applied). Errors
+/// name the target: a file without bones, an unknown clip (naming the clips there are), a malformed skin.
+Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene::TargetSpec& spec,
+                                                                    const io::TriangleMesh& mesh, std::size_t i);
+
+/// Loads every target with its transform (and the skin of an animated one). Errors name the target.
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);
 
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an

@@ -2,6 +2,7 @@
 
 #include "pipeline/target_cache.h"
 #include "io/load_mesh.h"
+#include "sampling/skin_weights.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -68,13 +69,47 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
       ts.shape.push_back(std::move(sw.shape));
       swaps.emplace_back(swap.time, std::move(sw.set));
     }
-    out.shapes.push_back(std::move(ts));
     control::TargetMotion motion{scene.targets[i].keyframes, scene.targets[i].smooth(),
                                  0.5f * (geometry[i].box.min + geometry[i].box.max)};
+    control::ControlTarget ct;
+    ct.set = std::move(tc.set);
+    ct.start = static_cast<double>(scene.targets[i].start);
+    ct.motion = motion;
+    ct.swaps = std::move(swaps);
+    if (const auto& skin = geometry[i].skin) {
+      // Skin weights of the samples at the bind pose (sampling/skin_weights.h), and the posed target for the metrics.
+      const auto how = skin->spec.weights == control::SkinWeightSource::Diffusion ? sampling::SkinWeighting::Diffusion
+                                                                                 : sampling::SkinWeighting::ClosestPoint;
+      FF_TRY(sampling::SampleSkin w, sampling::sample_skin_weights(geometry[i].mesh, *geometry[i].field, skin->skin,
+                                                                  ct.set.position, ct.set.spacing, how));
+      TargetShapes::Skinned sk{skin, geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
+                               w.joints, w.weights, ct.set.spacing};
+      ts.skinned = std::move(sk);
+      ct.skin = skin;
+      ct.skin_joints = std::move(w.joints);
+      ct.skin_weights = std::move(w.weights);
+    }
+    out.shapes.push_back(std::move(ts));
     out.motions.push_back(motion);
-    out.controls.push_back({std::move(tc.set), static_cast<double>(scene.targets[i].start), motion, std::move(swaps)});
+    out.controls.push_back(std::move(ct));
   }
   return out;
+}
+
+Result<metrics::TargetShape> posed_shape(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
+  std::vector<io::Mat4f> K;
+  sk.skin->world_joint_matrices(time, K);
+  control::PosedJoints joints;
+  joints.set(std::move(K), sk.skin->spec.skinning);
+  io::TriangleMesh mesh;
+  mesh.triangles = sk.bind_mesh.triangles;
+  mesh.vertices.resize(sk.bind_mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    mesh.vertices[v] = pose.apply(joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]));
+  std::vector<Vec3f> samples(sk.bind_samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
+  return metrics::TargetShape::build(mesh, samples, sk.spacing);
 }
 
 ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,
@@ -86,11 +121,21 @@ ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std:
   double w = 0, e = 0, ef = 0, eb = 0, efa = 0, in = 0, sp = 0;
   std::size_t ctrl = 0;
   for (std::size_t t = 0; t < shapes.size(); ++t) {
-    // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose.
+    // A moving target is measured in its rest frame, the fluid mapped into it by the inverse pose. A skinned one is
+    // measured against its mesh posed at this time (LBS of its vertices, then the keyframed pose): a shape of its own.
     const control::Pose pose = motions[t].at(time);
-    const metrics::TargetShape& shape = shapes[t].at(time);
-    const auto m = metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
-                                    pose.rest_from_world(), pose.scale);
+    const bool skinned = shapes[t].skinned && (shapes[t].from.size() < 2 || time < shapes[t].from[1]);
+    std::optional<metrics::TargetShape> posed;
+    if (skinned) {
+      auto s = posed_shape(*shapes[t].skinned, pose, time);
+      if (s) posed = std::move(*s);
+      else spdlog::warn("target {}: the posed target has no shape at t = {} s ({}); measured at rest", t, time, s.error().message);
+    }
+    const metrics::TargetShape& shape = posed ? *posed : shapes[t].at(time);
+    const auto m = posed ? metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
+                                            Eigen::Affine3f::Identity(), 1.0f)
+                         : metrics::measure(shape, static_cast<std::uint8_t>(t), p.position, p.target, controlled, r,
+                                            pose.rest_from_world(), pose.scale);
     out.per_target.push_back(m);
     const double nc = static_cast<double>(shape.sample_count());
     ctrl += m.controlled;

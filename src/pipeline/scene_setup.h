@@ -14,8 +14,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +28,19 @@ namespace ff::pipeline {
 struct TargetShapes {
   std::vector<double> from;  // from[0] = −∞
   std::vector<metrics::TargetShape> shape;
+  /// A skinned target's first phase is measured against its posed mesh: the bind mesh and samples with their skin,
+  /// posed at each measured time and given a shape of their own (metrics::TargetShape::build).
+  struct Skinned {
+    std::shared_ptr<const control::TargetSkin> skin;
+    io::TriangleMesh bind_mesh;
+    std::vector<std::array<std::uint16_t, io::kMaxInfluences>> mesh_joints;
+    std::vector<std::array<float, io::kMaxInfluences>> mesh_weights;
+    std::vector<Vec3f> bind_samples;
+    std::vector<std::array<std::uint16_t, io::kMaxInfluences>> sample_joints;
+    std::vector<std::array<float, io::kMaxInfluences>> sample_weights;
+    float spacing = 0.0f;
+  };
+  std::optional<Skinned> skinned;
   const metrics::TargetShape& at(double t) const {
     std::size_t k = 0;
     while (k + 1 < from.size() && t >= from[k + 1]) ++k;
@@ -61,6 +77,9 @@ struct TargetSetup {
 Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
                                         const std::filesystem::path& cache_dir,
                                         const std::filesystem::path& report_dir, core::Progress& progress);
+
+/// A skinned target's metric shape at `time`: its mesh and samples skinned, then posed by `pose` (its keyframes).
+Result<metrics::TargetShape> posed_shape(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
 
 /// The N_c-weighted shape metrics of one frame, and each target's own.
 struct ShapeMeasure {

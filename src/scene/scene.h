@@ -18,6 +18,7 @@
 // Unknown keys are errors naming the JSON path and the closest valid key; out-of-range values name the key, the
 // value and the range. Mesh paths are relative to the scene file.
 #include "control/registry.h"
+#include "control/skinning.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "core/fields.h"
@@ -62,6 +63,9 @@ struct TargetSpec {
     }
   };
   std::vector<Swap> swaps;
+  /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "start", "skinning",
+  /// "weights"}. Without a clip the target is not animated, as a mesh without a skin.
+  control::AnimationSpec animation;
 
   bool smooth() const { return interpolation == Interpolation::Smooth; }
   template <class S, class F>
@@ -77,6 +81,7 @@ struct TargetSpec {
     f("interpolation", s.interpolation, plain("between keyframes"));
     f("morph", s.swaps, plain("mesh swaps: from each time on the target is that mesh"));
     f("tint", s.tint, closed(0.0, 1.0, "linear RGB its liquid absorbs towards in the GLB's water material"));
+    f("animation", s.animation, plain("a skinned mesh file's clip the target plays (its samples follow the skin)"));
   }
   Status validate(std::string_view path) const;
 };

@@ -1,0 +1,246 @@
+// The skin of a mesh file through Assimp (io/skin.h): nodes, bones, weights, clips.
+//
+// The file is read a second time (load_mesh has already checked it and made the mesh), now keeping what load_mesh
+// throws away: bone weights and animations, and the meshes separate with their nodes (no PreTransformVertices,
+// which drops bones). Each raw vertex's bind position is computed as load_mesh computes it (its mesh node's
+// global matrix, then T), and every vertex of load_mesh's welded mesh takes the weights of the raw vertex
+// nearest to it (distance ~0: the weld is by identical position).
+#include "io/skin.h"
+
+#include "core/point_tree.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/anim.h>
+#include <assimp/mesh.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <map>
+#include <new>
+#include <string>
+
+namespace ff::io {
+namespace {
+namespace fs = std::filesystem;
+
+Error skin_error(const fs::path& path, std::string_view reason) {
+  return input_error(fmt::format("{}: {}", path.filename().string(), reason));
+}
+
+Mat4f to_eigen(const aiMatrix4x4& m) {
+  Mat4f e;
+  e << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3, m.d4;
+  return e;
+}
+
+bool finite(const Mat4f& m) { return m.allFinite(); }
+
+/// The node tree flattened parents-first, with every node's name → index.
+struct Flattened {
+  std::vector<SkinNode> nodes;
+  std::vector<const aiNode*> source;
+  std::map<std::string, int> by_name;
+};
+
+Status flatten(const fs::path& path, const aiNode* node, int parent, Flattened& f, int depth) {
+  if (depth > 1000) return skin_error(path, "node hierarchy deeper than 1000 levels");
+  SkinNode n;
+  n.name = node->mName.C_Str();
+  n.parent = parent;
+  aiVector3D s, t;
+  aiQuaternion r;
+  node->mTransformation.Decompose(s, r, t);
+  n.translation = Vec3f(t.x, t.y, t.z);
+  n.rotation = Quatf(r.w, r.x, r.y, r.z).normalized();
+  n.scale = Vec3f(s.x, s.y, s.z);
+  if (!n.translation.allFinite() || !n.rotation.coeffs().allFinite() || !n.scale.allFinite())
+    return skin_error(path, fmt::format("node '{}' has a non-finite transform", n.name));
+  const int index = static_cast<int>(f.nodes.size());
+  f.by_name.emplace(n.name, index);  // the first of equal names wins, as Assimp's FindNode
+  f.nodes.push_back(std::move(n));
+  f.source.push_back(node);
+  for (unsigned c = 0; c < node->mNumChildren; ++c) FF_CHECK(flatten(path, node->mChildren[c], index, f, depth + 1));
+  return {};
+}
+
+/// The vertex weights being gathered: up to all of a vertex's influences, cut to the 4 largest at the end.
+struct Influences {
+  std::vector<std::pair<float, int>> w;  // (weight, joint)
+};
+
+Result<std::optional<Skin>> load_skin_impl(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform) {
+  Assimp::Importer importer;
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate);
+  if (scene == nullptr || scene->mRootNode == nullptr)
+    return skin_error(path, fmt::format("cannot be read for its skin: {}", importer.GetErrorString()));
+  bool any_bones = false;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) any_bones = any_bones || scene->mMeshes[m]->mNumBones > 0;
+  if (!any_bones) return std::optional<Skin>{};
+
+  Flattened f;
+  FF_CHECK(flatten(path, scene->mRootNode, -1, f, 0));
+  Skin skin;
+  skin.nodes = f.nodes;
+  std::vector<Mat4f> rest;
+  skin.global_matrices(-1, 0.0, rest);
+  const Mat4f T = transform_matrix(transform);
+
+  // Joints: one per (node, inverse bind) pair, shared by meshes that agree on it.
+  auto joint_for = [&](int node, const Mat4f& inverse_bind) -> Result<int> {
+    for (std::size_t j = 0; j < skin.joint_nodes.size(); ++j)
+      if (skin.joint_nodes[j] == node && skin.inverse_bind[j].isApprox(inverse_bind, 1e-6f)) return static_cast<int>(j);
+    if (skin.joint_nodes.size() >= 65535) return skin_error(path, "more than 65535 joints");
+    skin.joint_nodes.push_back(node);
+    skin.inverse_bind.push_back(inverse_bind);
+    return static_cast<int>(skin.joint_nodes.size() - 1);
+  };
+
+  // Raw vertices: bind position in the world and influences, mesh by mesh, node by node (instances repeat).
+  std::vector<Vec3f> raw_position;
+  std::vector<Influences> raw_influence;
+  for (std::size_t n = 0; n < f.nodes.size(); ++n) {
+    const aiNode* node = f.source[n];
+    const Mat4f G = rest[n];
+    if (!finite(G)) return skin_error(path, fmt::format("node '{}' has a non-finite global transform", f.nodes[n].name));
+    const Mat4f G_inv = G.inverse();
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+      const aiMesh* m = scene->mMeshes[node->mMeshes[k]];
+      if (m == nullptr || !(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+      const std::size_t base = raw_position.size();
+      raw_position.resize(base + m->mNumVertices);
+      raw_influence.resize(base + m->mNumVertices);
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        const aiVector3D& p = m->mVertices[v];
+        const Eigen::Vector4f w = T * (G * Eigen::Vector4f(p.x, p.y, p.z, 1.0f));
+        raw_position[base + v] = w.head<3>();
+      }
+      for (unsigned b = 0; b < m->mNumBones; ++b) {
+        const aiBone* bone = m->mBones[b];
+        const Mat4f offset = to_eigen(bone->mOffsetMatrix);
+        if (!finite(offset)) return skin_error(path, fmt::format("bone '{}' has a non-finite offset matrix", bone->mName.C_Str()));
+        const auto it = f.by_name.find(bone->mName.C_Str());
+        int j = -1;
+        if (it == f.by_name.end()) {
+          // A bone without its node (assimp-testmodels' X/anim_test.x has two): nothing moves it, so its vertices
+          // keep their place on the mesh's node, as a viewer that finds no node for a bone shows them.
+          skin.warnings.push_back(fmt::format("bone '{}' names no node of the file: its vertices follow the mesh's node '{}'",
+                                              bone->mName.C_Str(), f.nodes[n].name));
+          FF_TRY(j, joint_for(static_cast<int>(n), G_inv));
+        } else {
+          FF_TRY(j, joint_for(it->second, Mat4f(offset * G_inv)));
+        }
+        for (unsigned i = 0; i < bone->mNumWeights; ++i) {
+          const aiVertexWeight& vw = bone->mWeights[i];
+          if (!std::isfinite(vw.mWeight) || vw.mWeight < 0.0f)
+            return skin_error(path, fmt::format("bone '{}' has weight {} (not a finite number ≥ 0)", bone->mName.C_Str(), vw.mWeight));
+          if (vw.mVertexId >= m->mNumVertices)
+            return skin_error(path, fmt::format("bone '{}' weights vertex {} of a mesh with {}", bone->mName.C_Str(),
+                                                vw.mVertexId, m->mNumVertices));
+          if (vw.mWeight > 0.0f) raw_influence[base + vw.mVertexId].w.emplace_back(vw.mWeight, j);
+        }
+      }
+      // Vertices no bone reaches follow their node rigidly.
+      int rigid = -1;
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        if (!raw_influence[base + v].w.empty()) continue;
+        if (rigid < 0) {
+          FF_TRY(rigid, joint_for(static_cast<int>(n), G_inv));  // x(t) = G_n(t) · G_n(rest)⁻¹ · x_bind
+        }
+        raw_influence[base + v].w.emplace_back(1.0f, rigid);
+      }
+    }
+  }
+  if (raw_position.empty()) return skin_error(path, "has bones but no triangle mesh");
+
+  // load_mesh's vertices take their raw vertex's weights: the 4 largest, renormalised.
+  const core::PointTree tree(raw_position);
+  skin.joints.resize(mesh.vertices.size());
+  skin.weights.resize(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const auto near = tree.nearest(mesh.vertices[v]);
+    auto w = raw_influence[tree.original(near.slot)].w;
+    std::sort(w.begin(), w.end(), [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+    if (w.size() > kMaxInfluences) w.resize(kMaxInfluences);
+    double sum = 0.0;
+    for (const auto& [wt, j] : w) sum += wt;
+    skin.joints[v].fill(0);
+    skin.weights[v].fill(0.0f);
+    for (std::size_t k = 0; k < w.size(); ++k) {
+      skin.joints[v][k] = static_cast<std::uint16_t>(w[k].second);
+      skin.weights[v][k] = static_cast<float>(w[k].first / sum);
+    }
+  }
+
+  // Clips: keys in ticks → seconds (25 ticks per second where the file does not say, as Assimp's viewer).
+  for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
+    const aiAnimation* anim = scene->mAnimations[a];
+    const double tps = anim->mTicksPerSecond > 0.0 ? anim->mTicksPerSecond : 25.0;
+    AnimationClip clip;
+    clip.name = anim->mName.C_Str();
+    double last = 0.0;
+    for (unsigned c = 0; c < anim->mNumChannels; ++c) {
+      const aiNodeAnim* ch = anim->mChannels[c];
+      const auto it = f.by_name.find(ch->mNodeName.C_Str());
+      if (it == f.by_name.end()) continue;  // a channel for a node the file lacks moves nothing
+      NodeChannel nc;
+      nc.node = it->second;
+      auto time = [&](double ticks, const char* what) -> Result<double> {
+        if (!std::isfinite(ticks)) return skin_error(path, fmt::format("clip '{}' has a non-finite {} key time", clip.name, what));
+        return ticks / tps;
+      };
+      for (unsigned k = 0; k < ch->mNumPositionKeys; ++k) {
+        FF_TRY(const double t, time(ch->mPositionKeys[k].mTime, "position"));
+        const auto& p = ch->mPositionKeys[k].mValue;
+        if (!nc.translation_times.empty() && t <= nc.translation_times.back()) continue;  // keys must increase
+        nc.translation_times.push_back(t);
+        nc.translations.emplace_back(p.x, p.y, p.z);
+      }
+      for (unsigned k = 0; k < ch->mNumRotationKeys; ++k) {
+        FF_TRY(const double t, time(ch->mRotationKeys[k].mTime, "rotation"));
+        const auto& q = ch->mRotationKeys[k].mValue;
+        if (!nc.rotation_times.empty() && t <= nc.rotation_times.back()) continue;
+        nc.rotation_times.push_back(t);
+        nc.rotations.push_back(Quatf(q.w, q.x, q.y, q.z).normalized());
+      }
+      for (unsigned k = 0; k < ch->mNumScalingKeys; ++k) {
+        FF_TRY(const double t, time(ch->mScalingKeys[k].mTime, "scale"));
+        const auto& s = ch->mScalingKeys[k].mValue;
+        if (!nc.scale_times.empty() && t <= nc.scale_times.back()) continue;
+        nc.scale_times.push_back(t);
+        nc.scales.emplace_back(s.x, s.y, s.z);
+      }
+      for (const auto& v : nc.translations)
+        if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite position key", clip.name));
+      for (const auto& q : nc.rotations)
+        if (!q.coeffs().allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite rotation key", clip.name));
+      for (const auto& v : nc.scales)
+        if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite scale key", clip.name));
+      for (const auto* times : {&nc.translation_times, &nc.rotation_times, &nc.scale_times})
+        if (!times->empty()) last = std::max(last, times->back());
+      clip.channels.push_back(std::move(nc));
+    }
+    const double said = std::isfinite(anim->mDuration) ? anim->mDuration / tps : 0.0;
+    clip.duration = std::max(said, last);
+    skin.clips.push_back(std::move(clip));
+  }
+  return std::optional<Skin>(std::move(skin));
+}
+
+}  // namespace
+
+Result<std::optional<Skin>> load_skin(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform) {
+  try {
+    return load_skin_impl(path, mesh, transform);
+  } catch (const std::bad_alloc&) {
+    return skin_error(path, "out of memory while reading its skin");
+  } catch (const std::exception& e) {
+    return skin_error(path, e.what());
+  }
+}
+
+}  // namespace ff::io

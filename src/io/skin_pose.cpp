@@ -1,0 +1,105 @@
+// Skin evaluation (io/skin.h): clips sampled into node matrices, joint matrices, clip lookup. No Assimp here: the
+// loader is skin.cpp.
+#include "io/skin.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <numbers>
+
+namespace ff::io {
+namespace {
+
+/// The key interval of `t` in `times` (increasing): i and the blend u ∈ [0, 1] between key i and i + 1.
+std::pair<std::size_t, float> locate(const std::vector<double>& times, double t) {
+  if (times.size() < 2 || t <= times.front()) return {0, 0.0f};
+  if (t >= times.back()) return {times.size() - 1, 0.0f};
+  const auto it = std::upper_bound(times.begin(), times.end(), t);
+  const auto i = static_cast<std::size_t>(it - times.begin()) - 1;
+  const double span = times[i + 1] - times[i];
+  return {i, span > 0.0 ? static_cast<float>((t - times[i]) / span) : 0.0f};
+}
+
+Vec3f lerp_key(const std::vector<double>& times, const std::vector<Vec3f>& values, double t, const Vec3f& rest) {
+  if (values.empty()) return rest;
+  const auto [i, u] = locate(times, t);
+  if (u == 0.0f || i + 1 >= values.size()) return values[std::min(i, values.size() - 1)];
+  return (1.0f - u) * values[i] + u * values[i + 1];
+}
+
+Quatf slerp_key(const std::vector<double>& times, const std::vector<Quatf>& values, double t, const Quatf& rest) {
+  if (values.empty()) return rest;
+  const auto [i, u] = locate(times, t);
+  if (u == 0.0f || i + 1 >= values.size()) return values[std::min(i, values.size() - 1)];
+  return values[i].slerp(u, values[i + 1]);  // Eigen's slerp takes the shorter arc
+}
+
+Mat4f trs(const Vec3f& t, const Quatf& r, const Vec3f& s) {
+  Mat4f m = Mat4f::Identity();
+  m.topLeftCorner<3, 3>() = r.normalized().toRotationMatrix() * s.asDiagonal();
+  m.topRightCorner<3, 1>() = t;
+  return m;
+}
+
+}  // namespace
+
+Mat4f transform_matrix(const MeshTransform& t) {
+  // As MeshTransform::apply: R = Rz · Ry · Rx from degrees, in double.
+  const Vec3d r = t.rotate_deg.cast<double>() * (std::numbers::pi / 180.0);
+  const Eigen::Matrix3d rot = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = rot * t.scale.cast<double>().asDiagonal();
+  m.topRightCorner<3, 1>() = t.translate.cast<double>();
+  return m.cast<float>();
+}
+
+Mat4f SkinNode::local() const { return trs(translation, rotation, scale); }
+
+Result<std::size_t> Skin::find_clip(const std::string& name) const {
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    if (clips[c].name == name) return c;
+  std::size_t index = 0;
+  const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), index);
+  if (ec == std::errc() && end == name.data() + name.size() && index < clips.size()) return index;
+  std::string there;
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    there += fmt::format("{}{} '{}'", c ? ", " : "", c, clips[c].name);
+  return input_error(fmt::format("no animation clip '{}' (the file has {})", name,
+                                 clips.empty() ? std::string("none") : there));
+}
+
+void Skin::global_matrices(int clip, double t, std::vector<Mat4f>& out) const {
+  std::vector<Vec3f> tr(nodes.size()), sc(nodes.size());
+  std::vector<Quatf> ro(nodes.size());
+  for (std::size_t n = 0; n < nodes.size(); ++n) tr[n] = nodes[n].translation, ro[n] = nodes[n].rotation, sc[n] = nodes[n].scale;
+  if (clip >= 0 && static_cast<std::size_t>(clip) < clips.size()) {
+    const AnimationClip& c = clips[static_cast<std::size_t>(clip)];
+    const double at = std::clamp(t, 0.0, c.duration);
+    for (const NodeChannel& ch : c.channels) {
+      if (ch.node < 0 || static_cast<std::size_t>(ch.node) >= nodes.size()) continue;
+      const auto n = static_cast<std::size_t>(ch.node);
+      tr[n] = lerp_key(ch.translation_times, ch.translations, at, tr[n]);
+      ro[n] = slerp_key(ch.rotation_times, ch.rotations, at, ro[n]);
+      sc[n] = lerp_key(ch.scale_times, ch.scales, at, sc[n]);
+    }
+  }
+  out.resize(nodes.size());
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    const Mat4f local = trs(tr[n], ro[n], sc[n]);
+    out[n] = nodes[n].parent >= 0 ? Mat4f(out[static_cast<std::size_t>(nodes[n].parent)] * local) : local;
+  }
+}
+
+void Skin::joint_matrices(int clip, double t, std::vector<Mat4f>& out) const {
+  std::vector<Mat4f> global;
+  global_matrices(clip, t, global);
+  out.resize(joint_nodes.size());
+  for (std::size_t j = 0; j < joint_nodes.size(); ++j)
+    out[j] = global[static_cast<std::size_t>(joint_nodes[j])] * inverse_bind[j];
+}
+
+}  // namespace ff::io
