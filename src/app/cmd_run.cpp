@@ -57,6 +57,7 @@ int run_scene_file(const fs::path& scene_file, const pipeline::RunOptions& opt) 
                  sum->mesh_triangles, sum->mesh_ok ? "watertight and manifold" : "NOT watertight/manifold",
                  (opt.out_dir / "mesh" / "final.obj").string(),
                  sum->mesh_frames > 1 ? ", " + (opt.out_dir / "animation.glb").string() : std::string());
+  if (sum->rigged) spdlog::info("rig: the formed mesh with its target's skeleton and clips -> {}", (opt.out_dir / "rigged.glb").string());
   if (sum->has_targets && spdlog::get_level() <= spdlog::level::info) print_summary(*sum);  // -q: no summary
   return 0;
 }

@@ -6,6 +6,8 @@
 
 #include "pipeline/auto_scene.h"
 #include "pipeline/run_budget.h"
+#include "pipeline/skin_transfer.h"
+#include "io/write_rigged_glb.h"
 #include "pipeline/scene_setup.h"
 
 #include "core/memory.h"
@@ -401,6 +403,27 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   return {};
 }
 
+/// OUT/rigged.glb of a run whose one target is skinned: final.obj with the skin transferred from the target posed at
+/// the last frame (pipeline/skin_transfer.h), moved to the bind pose, with the target's skeleton and clips, so that
+/// it plays with no rigging step. The keyframed pose of that time, if any, is taken off first.
+Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const TargetGeometry& target,
+                      const control::TargetMotion& motion, double time, RunSummary& sum) {
+  auto formed = io::load_mesh(out / "mesh" / "final.obj");
+  if (!formed) return Error{formed.error().kind, "rigging: " + formed.error().message};
+  const Eigen::Affine3f rest = motion.at(time).rest_from_world();
+  for (Vec3f& v : formed->vertices) v = rest * v;
+  const control::TargetSkin& skin = *target.skin;
+  FF_TRY(SkinnedSurface rigged,
+         transfer_skin(*formed, target.mesh, skin.skin, scene.targets[0].transform, skin.clip, skin.clip_time(time)));
+  FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, skin.skin,
+                                scene.targets[0].transform, scene.targets[0].tint));
+  spdlog::info("rigged.glb: the final mesh in bind pose with {} joints and {} clip(s) ({} vertices by the fallback, "
+               "round trip within {:.2g} m)", skin.skin.joint_nodes.size(), skin.skin.clips.size(), rigged.unreached,
+               rigged.max_bind_error_m);
+  sum.rigged = true;
+  return {};
+}
+
 }  // namespace
 
 // Both bounds of the default animation, measured on the default scene (200 frames, 10k particles; bench/RESULTS.md,
@@ -502,6 +525,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
 
   RunSummary sum = run_summary(facts, st, last_frame);
   if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, sum, progress));
+  if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
+    FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, sum));
   return sum;
 }
 

@@ -44,6 +44,7 @@ struct RunSummary {
   std::size_t mesh_triangles = 0, mesh_frames = 0;
   bool mesh_ok = false;
   double mesh_seconds = 0.0;
+  bool rigged = false;  ///< OUT/rigged.glb written (one skinned target)
 };
 
 /// Runs the scene into `options.out_dir`. Everything already written stays valid on any error.

@@ -453,3 +453,46 @@ TEST(Cli, AMirroredBunnyFormsLikeTheOriginal) {
 
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+// A skinned, animated target (issue 19): the run follows the clip, measures against the posed target, and writes
+// rigged.glb, the formed mesh in bind pose with the file's skeleton and clip, which the Khronos validator passes and
+// three.js plays: posed at the run's last time it covers the formed final.obj within 2 d.
+TEST(Cli, ASkinnedTargetRunWritesARiggedGlbThatPlaysTheFormedShape) {
+  using nlohmann::json;
+  const auto dir = test::temp_dir("rigged-run");
+  const auto scene = e2e::write_scene(dir, R"({
+    "targets": [{"mesh": "/usr/share/assimp/models/X/anim_test.x", "scale": 0.3,
+                 "animation": {"clip": "cylinder_test", "speed": 0.5}}],
+    "sampling": {"auto_count": 3000},
+    "output": {"frames": 90}
+  })");
+  const fs::path out = dir / "out";
+  const auto r = e2e::run({"run", scene.string(), "-o", out.string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("skinned, "), std::string::npos) << r.err;
+  ASSERT_TRUE(fs::exists(out / "rigged.glb")) << r.err;
+  const json report = json::parse(e2e::read_file(out / "report.json"));
+  const double spacing = report["scene"]["solver"]["particle_radius"].get<double>() * 2.0;
+  const double t_end = 90.0 / 60.0, tau = 0.5 * t_end;  // the clip time of the last frame (speed 0.5, 1 s clip)
+  ASSERT_LT(tau, 1.0);
+  if (test::shell("node --version").first != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
+  const auto [rc, o] = test::shell("node '" + (test::source_dir() / "scripts" / "check_rigged_glb.mjs").string() + "' '" +
+                                   (out / "rigged.glb").string() + "' --clip 0 --times " + std::to_string(tau));
+  ASSERT_EQ(rc, 0) << o;
+  const json j = json::parse(o.substr(o.rfind("\n{") == std::string::npos ? 0 : o.rfind("\n{") + 1), nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << o;
+  EXPECT_EQ(j["errors"], 0) << o;
+  EXPECT_EQ(j["three"]["skinned_meshes"], 1) << o;
+  ASSERT_EQ(j["three"]["poses"].size(), 1u) << o;
+  auto formed = io::load_mesh(out / "mesh" / "final.obj");
+  ASSERT_TRUE(formed.has_value());
+  const Aabb b = formed->bounds();
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(j["three"]["poses"][0]["min"][a].get<double>(), b.min[a], 2.0 * spacing) << "axis " << a << ": " << o;
+    EXPECT_NEAR(j["three"]["poses"][0]["max"][a].get<double>(), b.max[a], 2.0 * spacing) << "axis " << a << ": " << o;
+  }
+}
+}  // namespace
+}  // namespace ff
