@@ -121,6 +121,82 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   }
 }
 
+// The two ways to weight the samples (closest point, diffusion) and to pose them (linear blend, dual quaternion),
+// measured on the walking character: the samples inside at bind that stay inside the posed mesh, and how much the
+// posed samples' nearest-neighbour distances change (tearing apart or crushing together), worst time of the clip.
+TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
+  const fs::path glb = character_glb();
+  ASSERT_FALSE(glb.empty());
+  std::printf("%-14s %-16s %12s %14s %14s\n", "weights", "skinning", "kept inside", "mean |dNN|/d", "p99 |dNN|/d");
+  for (const auto weights : {control::SkinWeightSource::ClosestPoint, control::SkinWeightSource::Diffusion}) {
+    scene::Scene scene;
+    scene::TargetSpec t;
+    t.mesh = glb;
+    t.animation.clip = "walk";
+    t.animation.weights = weights;
+    scene.targets.push_back(t);
+    scene.auto_radius = true;
+    scene.sampling.auto_count = 4000;
+    auto geometry = load_target_meshes(scene);
+    ASSERT_TRUE(geometry.has_value());
+    ASSERT_TRUE(complete_scene(scene, *geometry).ok());
+    auto setup = setup_targets(scene, *geometry, test::temp_dir("methods-cache"), test::temp_dir("methods-rep"),
+                               core::null_progress());
+    ASSERT_TRUE(setup.has_value());
+    const auto& sk = *setup->shapes[0].skinned;
+    auto bind_field = sampling::MeshField::build(sk.bind_mesh);
+    ASSERT_TRUE(bind_field.has_value());
+    std::vector<float> nn_bind(sk.bind_samples.size());
+    std::vector<Index> nn_of(sk.bind_samples.size());
+    for (std::size_t i = 0; i < nn_bind.size(); ++i) {
+      // The nearest other sample at bind (brute force: a few thousand samples).
+      float best = INFINITY;
+      Index who = kInvalidIndex;
+      for (std::size_t j = 0; j < nn_bind.size(); ++j) {
+        if (j == i) continue;
+        const float d2 = (sk.bind_samples[j] - sk.bind_samples[i]).squaredNorm();
+        if (d2 < best) best = d2, who = static_cast<Index>(j);
+      }
+      nn_bind[i] = std::sqrt(best), nn_of[i] = who;
+    }
+    for (const auto method : {control::SkinningMethod::Linear, control::SkinningMethod::DualQuaternion}) {
+      double worst_kept = 1.0, worst_mean = 0.0, worst_p99 = 0.0;
+      for (int k = 1; k <= 4; ++k) {
+        const double time = 1.1 * k / 4.0 * 0.999;
+        std::vector<io::Mat4f> K;
+        sk.skin->world_joint_matrices(time, K);
+        control::PosedJoints joints;
+        joints.set(K, method);
+        io::TriangleMesh posed = sk.bind_mesh;
+        for (std::size_t v = 0; v < posed.vertices.size(); ++v)
+          posed.vertices[v] = joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]);
+        auto field = sampling::MeshField::build(posed);
+        ASSERT_TRUE(field.has_value());
+        std::vector<Vec3f> x(sk.bind_samples.size());
+        for (std::size_t i = 0; i < x.size(); ++i) x[i] = joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]);
+        std::size_t in = 0, kept = 0;
+        std::vector<double> change(x.size());
+        for (std::size_t i = 0; i < x.size(); ++i) {
+          if (bind_field->inside(sk.bind_samples[i])) ++in, kept += field->inside(x[i]);
+          change[i] = std::abs((x[i] - x[nn_of[i]]).norm() - nn_bind[i]) / sk.spacing;
+        }
+        double mean = 0.0;
+        for (double c : change) mean += c;
+        mean /= double(change.size());
+        std::sort(change.begin(), change.end());
+        worst_kept = std::min(worst_kept, double(kept) / double(in));
+        worst_mean = std::max(worst_mean, mean);
+        worst_p99 = std::max(worst_p99, change[change.size() * 99 / 100]);
+      }
+      std::printf("%-14s %-16s %11.2f%% %14.4f %14.4f\n",
+                  weights == control::SkinWeightSource::Diffusion ? "diffusion" : "closest_point",
+                  method == control::SkinningMethod::Linear ? "linear" : "dual_quaternion", 100.0 * worst_kept, worst_mean,
+                  worst_p99);
+      EXPECT_GE(worst_kept, 0.99);
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Files, Skinned, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<SkinnedCase>& p) { return p.param.name; });
 
