@@ -74,6 +74,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   WsSession(tcp::socket&& socket, WsServer::Impl& server) : ws_(std::move(socket)), server_(server) {}
 
   void run(http::request<http::string_body> req) {
+    // Counted from the upgrade on, not from the end of the handshake: a burst of upgrades read before any handshake
+    // has finished would otherwise each pass the max_clients check.
+    server_.sessions.push_back(weak_from_this());
+    server_.clients = server_.live_sessions();
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     // No limit in Beast itself (it would fail the connection with 1009): read() takes messages a piece at a time
     // and drops one that grows past max_message, so an oversized message is ignored and the client stays.
@@ -92,6 +96,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     write_next();
   }
   void queue_text(std::shared_ptr<const std::string> text) {
+    // Still in the handshake: its hello, sent first once open, already says whatever this would have told it.
+    if (!open_) return;
     if (texts_.size() >= 256) return;  // a client that reads nothing must not grow the server's memory
     texts_.push_back(std::move(text));
     write_next();
@@ -104,10 +110,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
 
  private:
   void on_accept(beast::error_code ec) {
-    if (ec) return;
+    if (ec) return gone();
     open_ = true;
-    server_.sessions.push_back(weak_from_this());
-    server_.clients = server_.live_sessions();
     if (server_.cb.hello) queue_text(std::make_shared<const std::string>(server_.cb.hello()));
     read();
   }
