@@ -20,6 +20,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 
 namespace ff::server {
 namespace beast = boost::beast;
@@ -56,9 +57,16 @@ struct WsServer::Impl {
   // Read from other threads.
   std::atomic<std::uint64_t> frames_sent{0}, frames_skipped{0}, bad_messages{0};
   std::atomic<int> clients{0};
+  // The newest frame and surface published and not yet handed to the sessions. One handler at a time carries them
+  // to the I/O thread: a publisher faster than that thread (it is starved, or busy with many clients) replaces them
+  // here instead of queueing a handler, and a frame with it, per publish in the io_context.
+  std::mutex slot_mu;
+  std::shared_ptr<const Bytes> next_frame, next_surface;  // under slot_mu
 
   Impl(ServerOptions o, const StaticFiles& f, Callbacks c) : opt(std::move(o)), files(f), cb(std::move(c)) {}
   void accept();
+  void hand_over(std::shared_ptr<const Bytes> Impl::*slot, std::shared_ptr<const Bytes> item, bool count_skipped,
+                 void (WsSession::*queue)(std::shared_ptr<const Bytes>));
   int live_sessions() {
     std::erase_if(sessions, [](const auto& w) { return w.expired(); });
     return static_cast<int>(sessions.size());
@@ -317,18 +325,34 @@ Status WsServer::start() {
 
 std::uint16_t WsServer::port() const { return impl_->port; }
 
-void WsServer::publish_frame(std::shared_ptr<const std::vector<std::uint8_t>> frame) {
-  net::post(impl_->ioc, [this, frame = std::move(frame)] {
-    for (auto& w : impl_->sessions)
-      if (auto s = w.lock()) s->queue_frame(frame);
+void WsServer::Impl::hand_over(std::shared_ptr<const Bytes> Impl::*slot, std::shared_ptr<const Bytes> item,
+                               bool count_skipped, void (WsSession::*queue)(std::shared_ptr<const Bytes>)) {
+  bool post = false;
+  {
+    std::lock_guard lock(slot_mu);
+    post = !(this->*slot);
+    // Replaced before the I/O thread took it: every client skipped it.
+    if (!post && count_skipped) frames_skipped.fetch_add(std::uint64_t(clients.load()), std::memory_order_relaxed);
+    this->*slot = std::move(item);
+  }
+  if (!post) return;  // the handler already on its way takes this one
+  net::post(ioc, [this, slot, queue] {
+    std::shared_ptr<const Bytes> newest;
+    {
+      std::lock_guard lock(slot_mu);
+      newest = std::exchange(this->*slot, nullptr);
+    }
+    for (auto& w : sessions)
+      if (auto s = w.lock()) ((*s).*queue)(newest);
   });
 }
 
+void WsServer::publish_frame(std::shared_ptr<const std::vector<std::uint8_t>> frame) {
+  impl_->hand_over(&Impl::next_frame, std::move(frame), true, &WsSession::queue_frame);
+}
+
 void WsServer::publish_surface(std::shared_ptr<const std::vector<std::uint8_t>> surface) {
-  net::post(impl_->ioc, [this, surface = std::move(surface)] {
-    for (auto& w : impl_->sessions)
-      if (auto s = w.lock()) s->queue_surface(surface);
-  });
+  impl_->hand_over(&Impl::next_surface, std::move(surface), false, &WsSession::queue_surface);
 }
 
 void WsServer::broadcast_text(std::string text) {

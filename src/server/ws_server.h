@@ -50,7 +50,8 @@ class WsServer {
   Status start();
   std::uint16_t port() const;
   /// The newest frame, for every client (thread-safe). A client still writing the previous one gets only the
-  /// latest when it is done: frames in between are skipped, never queued.
+  /// latest when it is done: frames in between are skipped, never queued. Nor are they queued on the way to the I/O
+  /// thread: a frame published before that thread took the previous one replaces it.
   void publish_frame(std::shared_ptr<const std::vector<std::uint8_t>> frame);
   /// The newest live surface (frame_codec.h), for every client (thread-safe), in its own newest-only slot.
   void publish_surface(std::shared_ptr<const std::vector<std::uint8_t>> surface);
