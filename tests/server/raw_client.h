@@ -33,6 +33,7 @@ class RawSocket {
   RawSocket(const RawSocket&) = delete;
   RawSocket& operator=(const RawSocket&) = delete;
   bool ok() const { return ok_; }
+  int fd() const { return fd_; }
 
   bool send_all(const void* data, std::size_t n) {
     const auto* p = static_cast<const char*>(data);
@@ -128,6 +129,7 @@ class RawWebSocket {
     return s_.send_all(f) && s_.send_all(payload);
   }
   bool send_raw(const std::string& bytes) { return s_.send_all(bytes); }
+  RawSocket& socket() { return s_; }
   /// One message (continuation frames joined).
   std::optional<WsMessage> read() {
     WsMessage m;
