@@ -430,6 +430,8 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   if (!(frames >= 1 && frames <= 10'000'000)) return param_error(fmt::format("--frames = {} is outside [1, 10000000]", frames));
   FF_TRY(const fs::path exe, resolve_exe(o.exe));
   FF_CHECK(io::ensure_writable_dir(o.out_dir));
+  if (const auto n = io::remove_stale_temp_files(o.out_dir))
+    spdlog::info("compare: removed {} partial file(s) an interrupted compare left", n);
 
   CompareTable table;
   table.scene = o.scene_file.stem().string();

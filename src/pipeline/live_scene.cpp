@@ -35,6 +35,7 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   assign_targets(s->initial_, s->geometry_);
   if (s->initial_.size() == 0) return input_error("the scene creates no fluid particles");
   FF_CHECK(io::ensure_writable_dir(options.cache_dir));
+  (void)io::remove_stale_temp_files(options.cache_dir);  // a serve killed while it wrote the cache
   FF_TRY(TargetSetup prepared, setup_targets(s->scene_, s->geometry_, options.cache_dir, options.cache_dir, progress));
   s->controls_ = std::move(prepared.controls);
   s->shapes_ = std::move(prepared.shapes);

@@ -238,6 +238,9 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   sum.frames_read = frames.size();
   FF_CHECK(io::ensure_writable_dir(out));
   FF_CHECK(io::ensure_writable_dir(out / "mesh"));
+  // A mesh killed mid-write (kill -9) left its temporary files: the rerun clears them (writers still running keep
+  // theirs).
+  if (const auto n = io::remove_stale_temp_files(out)) spdlog::info("mesh: removed {} partial file(s) left in {}", n, out.string());
   if (o.vdb) {
     if (!io::vdb_available()) return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
     FF_CHECK(io::ensure_writable_dir(out / "vdb"));

@@ -147,8 +147,6 @@ Result<bool> resume_from_checkpoint(const fs::path& out, std::uint64_t scene_has
     spdlog::warn("--resume: no checkpoint in {}, starting from the beginning", ckpt_file.parent_path().string());
     return false;
   }
-  if (const auto n = io::remove_stale_temp_files(out))
-    spdlog::info("removed {} partial file(s) left by the interrupted run", n);
   fs::path used = ckpt_file;
   auto ck = fs::exists(ckpt_file) ? load_checkpoint(ckpt_file)
                                   : Result<sim::Checkpoint>(input_error(fmt::format("{}: missing", ckpt_file.string())));
@@ -470,6 +468,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
   // Inputs are all checked before the output folder is touched.
   FF_CHECK(io::ensure_writable_dir(out));
+  if (const auto n = io::remove_stale_temp_files(out))  // what a run or mesh killed mid-write left
+    spdlog::info("removed {} partial file(s) left by an interrupted run", n);
   if (!resume) {  // a fresh run: an earlier run's checkpoints must not become this one's previous checkpoint
     std::error_code ec;
     fs::remove(checkpoint_file(out), ec);

@@ -496,3 +496,38 @@ TEST(Cli, ASkinnedTargetRunWritesARiggedGlbThatPlaysTheFormedShape) {
 }
 }  // namespace
 }  // namespace ff
+
+namespace ff {
+namespace {
+// What scripts/fault_inject found: a `mesh` (or `compare`, or a fresh `run`) killed mid-write leaves its temporary
+// files, and the rerun must clear them (a writer still running keeps its own: the pid in the name is alive).
+TEST(Cli, RerunsClearTheTemporaryFilesAKilledCommandLeft) {
+  const auto dir = test::temp_dir("stale");
+  const auto scene = e2e::write_scene(dir, R"({
+    "solver": {"particle_radius": 0.02},
+    "domain": {"min": [0, 0, 0], "max": [0.8, 0.6, 0.32]},
+    "fluid": [{"shape": "box", "min": [0, 0, 0], "max": [0.28, 0.48, 0.32]}],
+    "output": {"frames": 8, "checkpoint_every": 4}
+  })");
+  const fs::path out = dir / "o";
+  ASSERT_EQ(e2e::run({"-q", "run", scene.string(), "-o", out.string(), "--no-mesh"}).code, 0);
+  // A pid that cannot be running (above the kernel's pid_max of 2^22), and this process's own (alive: kept).
+  const std::string dead = ".tmp.99999999", alive = ".tmp." + std::to_string(::getpid());
+  const auto plant = [](const fs::path& p) { std::ofstream(p) << "half"; };
+  fs::create_directories(out / "mesh");
+  plant(out / "mesh" / ("frame_00004.obj" + dead));
+  plant(out / ("animation.glb" + dead));
+  plant(out / ("particles.pc2" + alive));
+  ASSERT_EQ(e2e::run({"-q", "mesh", out.string(), "-o", out.string()}).code, 0);
+  EXPECT_FALSE(fs::exists(out / "mesh" / ("frame_00004.obj" + dead)));
+  EXPECT_FALSE(fs::exists(out / ("animation.glb" + dead)));
+  EXPECT_TRUE(fs::exists(out / ("particles.pc2" + alive))) << "a live writer's file must be kept";
+  fs::remove(out / ("particles.pc2" + alive));
+  // A fresh run (not --resume) into the folder clears them too.
+  plant(out / "particles" / ("frame_00003.ply" + dead));
+  ASSERT_EQ(e2e::run({"-q", "run", scene.string(), "-o", out.string(), "--no-mesh"}).code, 0);
+  EXPECT_FALSE(fs::exists(out / "particles" / ("frame_00003.ply" + dead)));
+  e2e::expect_no_temp_files(out);
+}
+}  // namespace
+}  // namespace ff
