@@ -260,9 +260,10 @@ TEST(SkinTransfer, TheRiggedGlbPlaysThroughTheFormedMeshInThreeJs) {
   }
 }
 
-// The acceptance size: a ~12k-vertex formed mesh against a ~30k-triangle target (the figure is printed; the bound
-// only catches a brute-force or quadratic regression on a loaded 2-core machine).
-TEST(SkinTransfer, TwelveThousandVerticesAgainstThirtyThousandTrianglesIsQuick) {
+// The acceptance size: a ~12k-vertex formed mesh against a ~30k-triangle target. Its time is printed, not asserted
+// (speed is the benchmarks' business); what is asserted is that every vertex is reached and that the result does
+// not depend on the thread count.
+TEST(SkinTransfer, TwelveThousandVerticesAgainstThirtyThousandTrianglesSameOnAnyThreadCount) {
   const TriangleMesh coarse = test::bar_mesh(300, 50);
   const Skin skin = test::bar_skin(coarse);
   const TriangleMesh fine_scene = test::bar_mesh(120, 100);
@@ -281,7 +282,6 @@ TEST(SkinTransfer, TwelveThousandVerticesAgainstThirtyThousandTrianglesIsQuick) 
   }
   std::printf("  transfer_skin: %zu formed vertices, %zu target triangles: %.1f ms (best of 3, %d threads)\n",
               formed.vertices.size(), coarse.triangles.size(), 1e3 * best, core::thread_count());
-  EXPECT_LT(best, 5.0);
   // The same bits on one thread (the header's determinism).
   auto many = transfer_skin(formed, coarse, skin, t, 0, 0.5);
   const int threads = core::thread_count();
