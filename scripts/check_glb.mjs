@@ -4,8 +4,7 @@
 //    "vertices_last", "box_last": [min, max] of the last frame's world-space positions,
 //    "material": the last frame's material as three.js made it: type, transmission, ior, thickness, attenuation}}
 // and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
-import fs from 'node:fs';
-import validator from 'gltf-validator';
+import { validate_glb } from './glb_report.mjs';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 
@@ -14,15 +13,7 @@ if (!file) {
   console.error('usage: node scripts/check_glb.mjs FILE.glb');
   process.exit(2);
 }
-const bytes = new Uint8Array(fs.readFileSync(file));
-const report = await validator.validateBytes(bytes, { maxIssues: 200 });
-const out = {
-  errors: report.issues.numErrors,
-  warnings: report.issues.numWarnings,
-  messages: report.issues.messages.slice(0, 10).map((m) => `${m.code} ${m.pointer ?? ''}: ${m.message}`),
-};
-
-const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+const { out, buffer } = await validate_glb(file);
 try {
   const gltf = await new GLTFLoader().parseAsync(buffer, '');
   const meshes = [];

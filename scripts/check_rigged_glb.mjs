@@ -7,8 +7,7 @@
 //              "clip": the played clip's name, "poses": [{"t", "min": [x, y, z], "max": [x, y, z]}]}}
 // and exits non-zero when three.js cannot load it. usage:
 //   node scripts/check_rigged_glb.mjs FILE.glb [--clip NAME|INDEX] [--times T1,T2,...]
-import fs from 'node:fs';
-import validator from 'gltf-validator';
+import { validate_glb } from './glb_report.mjs';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 
@@ -23,15 +22,7 @@ const opt = (name) => {
   return i > 0 ? args[i + 1] : undefined;
 };
 const times = (opt('--times') ?? '').split(',').filter((s) => s.length).map(Number);
-const bytes = new Uint8Array(fs.readFileSync(file));
-const report = await validator.validateBytes(bytes, { maxIssues: 200 });
-const out = {
-  errors: report.issues.numErrors,
-  warnings: report.issues.numWarnings,
-  messages: report.issues.messages.slice(0, 10).map((m) => `${m.code} ${m.pointer ?? ''}: ${m.message}`),
-};
-
-const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+const { out, buffer } = await validate_glb(file);
 try {
   const gltf = await new GLTFLoader().parseAsync(buffer, '');
   const skinned = [];
