@@ -64,7 +64,7 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
   FF_CHECK(params.validate());
   ControlSamples samples;
   FF_CHECK(samples.init(std::move(targets), "adaptive",
-                        {.cell_order = true, .weights = params.weights, .normals = true, .velocities = false}));
+                        {.cell_order = true, .weights = params.weights, .normals = true, .velocities = true}));
   std::unique_ptr<AdaptiveController> c(new AdaptiveController(ctx, params, samples.hc));
   c->samples_ = std::move(samples);
   const float d = ctx.spacing();
@@ -93,9 +93,17 @@ void AdaptiveController::for_each_bond(std::size_t i, F&& f) const {
 
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
+  // Every part of the control scales with its target's strength (1: as written; 0: the target is inactive, below).
+  strength_.resize(samples_.targets());
+  softened_ = false;
+  for (std::size_t t = 0; t < strength_.size(); ++t) {
+    strength_[t] = samples_.strength(static_cast<std::uint8_t>(t), time_);
+    softened_ = softened_ || (strength_[t] > 0.0f && strength_[t] < 1.0f);
+  }
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
-  if (samples_.update(view.time, 0.0f)) fill_.assign(samples_.size(), 0.0f);
+  // u_c over this sub-step (forward difference): moving targets carry their fluid along (AdaptiveParams::follow).
+  if (samples_.update(view.time, view.dt)) fill_.assign(samples_.size(), 0.0f);
   const std::size_t n = p.size(), m = samples_.position.size();
   const Vec3f* x = p.position.data();
   const std::uint8_t* tf = p.target.data();
@@ -280,19 +288,32 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
       if (!(len >= thr) || len == 0.0f) return;
       const Vec3f nh = nrm / len;
       const float out = nh.dot(a[j]);
-      if (out > 0.0f) a[j] -= out * nh;
+      if (out > 0.0f) a[j] -= (softened_ ? strength_[p.target[j]] : 1.0f) * out * nh;
     });
   }
-  // Speed limit of controlled fluid: v* = v + Δt a is brought back to max_speed through the acceleration.
+  // Speed limit of controlled fluid: v* = v + Δt a is brought back to max_speed through the acceleration. On a
+  // moving target, v* is first pulled toward the pose velocity u_c of the particle's nearest bonded sample, and the
+  // limit holds for v* − u_c: fluid is carried along with the moving shape, at any speed of the shape.
   {
     const float vmax = params_.max_speed * d_, dt = view.dt;
     const Vec3f* v = p.velocity.data();
+    const bool follow = samples_.moving() && params_.follow > 0.0f;
+    const float k = std::min(1.0f, params_.follow * dt / kReferenceDt);
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
       const auto j = static_cast<std::size_t>(jj);
       if (bond_off_[j] == bond_off_[j + 1]) return;
+      if (follow) {
+        const float s = softened_ ? strength_[p.target[j]] : 1.0f;
+        const Vec3f u = samples_.velocity[nearest_[j]];
+        a[j] += (s * k / dt) * (u - (v[j] + dt * a[j]));
+        const Vec3f vs = v[j] + dt * a[j] - u;
+        const float s2 = vs.squaredNorm();
+        if (s2 > vmax * vmax) a[j] += s * (vs * (vmax / std::sqrt(s2)) - vs) / dt;
+        return;
+      }
       const Vec3f vs = v[j] + dt * a[j];
       const float s2 = vs.squaredNorm();
-      if (s2 > vmax * vmax) a[j] += (vs * (vmax / std::sqrt(s2)) - vs) / dt;
+      if (s2 > vmax * vmax) a[j] += (softened_ ? strength_[p.target[j]] : 1.0f) * (vs * (vmax / std::sqrt(s2)) - vs) / dt;
     });
   }
   if (params_.gather) gather(p);
@@ -315,6 +336,9 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     seed_field_[t].compute(samples_.position, seeds_);
   }
   const float speed = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
+  // On a moving target the seed moves too: the steering velocity adds the seed's pose velocity (see follow), so fluid
+  // shed by a fast limb catches up with it instead of chasing where it was.
+  const bool chase = samples_.moving() && params_.follow > 0.0f;
   const Vec3f g = ctx_.gravity;
   const Vec3f* x = p.position.data();
   const Vec3f* v = p.velocity.data();
@@ -329,8 +353,10 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     const Vec3f to = samples_.position[s] - x[j];
     const float len = to.norm();
     if (len <= 0.0f) return;
-    const Vec3f v_des = (speed / len) * to;
-    a[j] += -g + inv_tau * (v_des - v[j]);
+    Vec3f v_des = (speed / len) * to;
+    if (chase) v_des += samples_.velocity[s];
+    const Vec3f da = -g + inv_tau * (v_des - v[j]);
+    a[j] += softened_ ? strength_[t] * da : da;
   });
 }
 
@@ -369,7 +395,8 @@ void AdaptiveController::adaptive_spring(sim::ParticleSet& p, float dt) const {
     }
     const float d = hsum(den);
     if (d > 0.0f) {
-      const Vec3f dx = (gamma / d) * Vec3f(hsum(nx), hsum(ny), hsum(nz));
+      const float g = softened_ ? gamma * strength_[p.target[j]] : gamma;
+      const Vec3f dx = (g / d) * Vec3f(hsum(nx), hsum(ny), hsum(nz));
       xs[j] = xj + dx;
       if (kinematic) shift[j] += dx;
     }
@@ -429,7 +456,7 @@ void AdaptiveController::sample_lambdas(sim::ParticleSet& p) {
     if (c >= 0.0f) return;
     const float k = mp / samples_.rho_c[i] * spiky_.kgrad;
     lambda_[i] = -c / (k * k * hsum(g2) + eps);
-    sample_xw_[i].w = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg;
+    sample_xw_[i].w = strength_[t] * samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg;
   });
   active_.clear();
   for (std::size_t i = 0; i < m; ++i)
@@ -471,7 +498,7 @@ void AdaptiveController::scatter_correction(sim::ParticleSet& p, const Correctio
   for (Index i : active_) {
     const std::uint8_t t = samples_.target[i];
     const Vec3f xi = samples_.position[i];
-    const float coef = samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = bond_radius2_[i];
+    const float coef = strength_[t] * samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = bond_radius2_[i];
     for (Index j : cf_.of(i)) {
       if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
       const Vec3f r = xi - xs[j];

@@ -51,7 +51,8 @@ class AdaptiveController final : public sim::Controller, public Steerable {
 
  private:
   AdaptiveController(const ControlContext& ctx, const AdaptiveParams& params, float hc);
-  bool active(std::uint8_t t, double time) const { return samples_.started(t, time); }
+  // Whether target t acts in this sub-step (started, strength above 0); strength_[t] is its strength then.
+  bool active(std::uint8_t t, double time) const { return samples_.acting(t, time); }
   void adaptive_spring(sim::ParticleSet& p, float dt) const;
   void control_correction(sim::ParticleSet& p, float dt);
   // The scale α and the clamp of a control displacement Δx_j (METHOD §a.3), applied to x*_j (and the shift).
@@ -80,6 +81,8 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   ControlSamples samples_;
   // Per sub-step.
   double time_ = 0.0;
+  std::vector<float> strength_;     // per target: its control strength in this sub-step (control/strength.h)
+  bool softened_ = false;           // some target acts with a strength below 1
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
   std::vector<float> fill_, bond_radius2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; bond radius H_c*²; λ

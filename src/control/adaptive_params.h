@@ -46,6 +46,12 @@ struct AdaptiveParams {
   /// of bonded particles to the clamp's own inflow speed, clamp · N_it · d / Δt_ref = 48 d/s, keeps the
   /// inflow the clamp sets (METHOD §a.3) and nothing faster. (0, 10000]
   float max_speed = 48.0f;
+  /// Moving targets (keyframes, skins, live steering; ours): bonded fluid follows the pose velocity u_c of its nearest
+  /// bonded sample (the paper's v_c). Each sub-step at Δt_ref this share of the difference v − u_c is removed, and
+  /// the speed limit above holds for v − u_c instead of v. Without it the fluid can only be pulled along at the
+  /// clamp's inflow speed (48 d/s, ~1 m/s on the 10k character) and a walking character's feet and hands, at 2–3 m/s,
+  /// shed their fluid. Static targets (u_c = 0) are not affected. [0, 1]; 0 = off.
+  float follow = 0.25f;
 
   float alpha = 0.5f;               ///< α of eq. 5/10, strength of the control correction. (0, 2]
   float epsilon = 1.0f;             ///< ε_c of eq. 6 as a multiple of S_0 (Σ|g|² of a full neighbourhood). (0, 100]
@@ -70,6 +76,7 @@ struct AdaptiveParams {
     f("gather", s.gather, plain("ours: unbonded fluid is steered toward under-filled samples"));
     f("kinematic", s.kinematic, plain("corrections move fluid without becoming velocity (an option to measure)"));
     f("max_speed", s.max_speed, open_closed(0.0, 10000.0, "speed limit of controlled fluid, d/s"));
+    f("follow", s.follow, closed(0.0, 1.0, "moving targets: share of v − u_c removed per sub-step at Δt_ref"));
     f("alpha", s.alpha, open_closed(0.0, 2.0, "α of eq. 5/10, strength of the control correction"));
     f("epsilon", s.epsilon, open_closed(0.0, 100.0, "ε_c of eq. 6, × S_0"));
     f("clamp", s.clamp, open_closed(0.0, 1.0, "largest correction per particle and iteration, d, at Δt_ref"));

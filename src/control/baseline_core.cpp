@@ -20,7 +20,7 @@ Status BaselineCore::init(std::vector<ControlTarget> targets, const ControlConte
 
 bool BaselineCore::update(double t_now, float dt) {
   time = t_now;
-  for (std::size_t t = 0; t < live.size(); ++t) live[t] = samples.started(static_cast<std::uint8_t>(t), t_now) ? 1 : 0;
+  for (std::size_t t = 0; t < live.size(); ++t) live[t] = samples.acting(static_cast<std::uint8_t>(t), t_now) ? 1 : 0;
   const bool swapped = samples.update(t_now, dt);
   if (swapped || samples.moving()) sample_grid_valid_ = false;
   return swapped;

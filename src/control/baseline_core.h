@@ -32,7 +32,8 @@ class BaselineCore {
   /// Fluid → sample pairs within r (near_samples), on the fluid positions x.
   void fluid_to_sample(const sim::ParticleSet& p, float r);
 
-  /// Whether fluid particle j (target tj) and sample i interact: same target, and the target has started.
+  /// Whether fluid particle j (target tj) and sample i interact: same target, and the target acts (it has started
+  /// and its strength is above 0; the baselines do not soften between 0 and 1).
   bool pairs(std::uint8_t tj, Index i) const { return samples.target[i] == tj && live[tj]; }
   bool live_target(std::uint8_t t) const { return t < live.size() && live[t]; }
 
@@ -41,7 +42,7 @@ class BaselineCore {
   float d = 0.0f;    ///< fluid spacing
   /// Every target's current samples (index = bound_control's "flattened index"): position, velocity u_c, ρ_c, target.
   ControlSamples samples;
-  std::vector<std::uint8_t> live;  ///< per target: started at the current time
+  std::vector<std::uint8_t> live;  ///< per target: acting at the current time (started, strength > 0)
   core::NeighborList near_fluid;    ///< sample → fluid pairs within the radius of the last sample_to_fluid
   core::NeighborList near_samples;  ///< fluid → sample pairs within the radius of the last fluid_to_sample
   double time = 0.0;

@@ -15,6 +15,7 @@ Status ControlSamples::init(std::vector<ControlTarget> targets, std::string_view
   hc = checked.hc;
   phases_ = std::move(checked.phases);
   start_ = std::move(checked.start);
+  strength_ = std::move(checked.strength);
   motion_ = std::move(checked.motion);
   skin_ = std::move(checked.skin);
   target_joints_ = std::move(checked.skin_joints);

@@ -37,7 +37,12 @@ class ControlSamples {
 
   std::size_t size() const { return position.size(); }
   std::size_t targets() const { return phases_.size(); }
-  bool started(std::uint8_t t, double at) const { return t < start_.size() && at >= start_[t]; }
+  /// Target `t`'s control strength at `at`: 0 before its start, else its track's value (control/strength.h).
+  float strength(std::uint8_t t, double at) const {
+    return t < start_.size() && at >= start_[t] ? strength_[t].at(at) : 0.0f;
+  }
+  /// Whether target `t` acts at all at `at` (started, strength above 0): a target that does not adds nothing.
+  bool acting(std::uint8_t t, double at) const { return strength(t, at) > 0.0f; }
   bool moving() const { return moving_; }
 
   float hc = 0.0f;  ///< H_c of every sample
@@ -58,6 +63,7 @@ class ControlSamples {
   std::vector<std::vector<TargetPhase>> phases_;  // per target: its sample sets in time order
   std::vector<std::size_t> current_;             // per target: the phase in use
   std::vector<double> start_;
+  std::vector<StrengthTrack> strength_;
   std::vector<TargetMotion> motion_;
   std::vector<std::shared_ptr<const TargetSkin>> skin_;  // per target, null: not skinned
   std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> target_joints_;  // per target, per sample

@@ -22,7 +22,9 @@ Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targe
   }
   for (std::size_t t = 0; t < targets.size(); ++t) {
     FF_CHECK(targets[t].motion.validate(fmt::format("targets[{}]", t)));
+    FF_CHECK(targets[t].strength.validate(fmt::format("targets[{}]", t)));
     c.start.push_back(targets[t].start);
+    c.strength.push_back(targets[t].strength);
     c.motion.push_back(targets[t].motion);
     c.moving = c.moving || targets[t].motion.moving();
     if (const auto& sk = targets[t].skin) {

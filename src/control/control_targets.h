@@ -3,6 +3,7 @@
 // all (they are sampled at one spacing), mesh swaps at increasing times, valid keyframes. Shared by `adaptive`
 // and the baselines so that they accept and reject exactly the same scenes.
 #include "control/skinning.h"
+#include "control/strength.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "sampling/control_set.h"
@@ -18,6 +19,7 @@ struct ControlTarget {
   sampling::ControlSet set;  ///< samples in the rest pose
   double start = 0.0;        ///< s; before this the target attracts nothing
   TargetMotion motion;       ///< keyframes (none: static)
+  StrengthTrack strength;    ///< control strength over time (no keys: 1); 0 releases the fluid
   /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
   std::vector<std::pair<double, sampling::ControlSet>> swaps;
   /// A skinned, animated target (control/skinning.h): its skin, and the weights of every sample of `set` (the
@@ -38,6 +40,7 @@ struct CheckedTargets {
   std::vector<std::vector<TargetPhase>> phases;    ///< per target, in time order
   std::vector<double> start;                       ///< per target, s
   std::vector<TargetMotion> motion;                ///< per target
+  std::vector<StrengthTrack> strength;             ///< per target
   std::vector<std::shared_ptr<const TargetSkin>> skin;  ///< per target (null: not skinned)
   std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> skin_joints;  ///< per target, per sample
   std::vector<std::vector<std::array<float, io::kMaxInfluences>>> skin_weights;

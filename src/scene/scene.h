@@ -19,6 +19,7 @@
 // value and the range. Mesh paths are relative to the scene file.
 #include "control/registry.h"
 #include "control/skinning.h"
+#include "control/strength.h"
 #include "control/target_motion.h"
 #include "core/error.h"
 #include "core/fields.h"
@@ -66,6 +67,8 @@ struct TargetSpec {
   /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "start", "skinning",
   /// "weights"}. Without a clip the target is not animated, as a mesh without a skin.
   control::AnimationSpec animation;
+  /// Control strength over time (control/strength.h): [{"time": T, "value": S}, ...], S in [0, 1]; none: 1.
+  std::vector<control::StrengthKey> strength;
 
   bool smooth() const { return interpolation == Interpolation::Smooth; }
   template <class S, class F>
@@ -82,6 +85,7 @@ struct TargetSpec {
     f("morph", s.swaps, plain("mesh swaps: from each time on the target is that mesh"));
     f("tint", s.tint, closed(0.0, 1.0, "linear RGB its liquid absorbs towards in the GLB's water material"));
     f("animation", s.animation, plain("a skinned mesh file's clip the target plays (its samples follow the skin)"));
+    f("strength", s.strength, plain("control strength keyframes: 1 holds, 0 releases the fluid, between softens"));
   }
   Status validate(std::string_view path) const;
 };

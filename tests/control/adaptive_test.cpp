@@ -22,11 +22,11 @@ using test::sphere_case;
 test::Outcome simulate(const Case& c, const std::string& controller, int frames, const control::AdaptiveParams& ap = {},
                        const control::TargetMotion& motion = {},
                        const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
-                       const Case* measure_against = nullptr) {
+                       const Case* measure_against = nullptr, const control::StrengthTrack& strength = {}) {
   control::ControllerSpec spec;
   spec.name = controller;
   spec.get<control::AdaptiveParams>() = ap;
-  return test::simulate(c, spec, frames, motion, swaps, measure_against);
+  return test::simulate(c, spec, frames, motion, swaps, measure_against, strength);
 }
 
 TEST(Adaptive, FormsASphereThatPlainPbfDoesNot) {
@@ -92,6 +92,37 @@ TEST(Adaptive, AMeshSwapMorphsTheFormedShape) {
   EXPECT_GT(morphed.m.inside_fraction, 0.9);
   std::printf("morph sphere -> slab at 2 s, at 5 s: E vs slab %.2f %%, inside %.3f (unmorphed sphere vs slab %.2f %%)\n",
               morphed.m.error_rate, morphed.m.inside_fraction, sphere_vs_box.m.error_rate);
+}
+
+// Form, hold, release (issue 19 item 4): formed by 2.5 s and released over 0.25 s, the fluid falls off the floating
+// sphere as free liquid, as under plain PBF; "release, then re-form" takes it back from the floor into the shape, where
+// E returns to the held run's level.
+TEST(Adaptive, AStrengthTrackReleasesTheFluidAndReformsIt) {
+  const Case c = sphere_case();
+  control::StrengthTrack release, reform, half;
+  release.keys = {{2.5, 1.0f}, {2.75, 0.0f}};
+  reform.keys = {{2.5, 1.0f}, {2.75, 0.0f}, {3.5, 0.0f}, {3.75, 1.0f}};
+  half.keys = {{0.0, 0.5f}};
+  const auto held = simulate(c, "adaptive", 300);
+  const auto released = simulate(c, "adaptive", 300, {}, {}, {}, nullptr, release);
+  const auto reformed = simulate(c, "adaptive", 480, {}, {}, {}, nullptr, reform);
+  const auto soft = simulate(c, "adaptive", 300, {}, {}, {}, nullptr, half);
+  std::printf("sphere at 5 s: held E %.2f %% inside %.3f; released E %.2f %% inside %.3f, controlled %zu; "
+              "released at 2.75 s and re-formed from 3.5 s, at 8 s: E %.2f %% inside %.3f splash %.3f; "
+              "strength 0.5: E %.2f %% inside %.3f\n",
+              held.m.error_rate, held.m.inside_fraction, released.m.error_rate, released.m.inside_fraction,
+              released.m.controlled, reformed.m.error_rate, reformed.m.inside_fraction, reformed.m.splash_fraction,
+              soft.m.error_rate, soft.m.inside_fraction);
+  // Released: nothing is controlled and most of the fluid has left the shape.
+  EXPECT_EQ(released.m.controlled, 0u);
+  EXPECT_LT(released.m.inside_fraction, 0.5);
+  EXPECT_GT(released.m.error_rate, 3.0 * held.m.error_rate);
+  // Re-formed: back in the shape, as close as the held run (within a fifth of a spacing of E) and as full.
+  EXPECT_LT(reformed.m.error_spacings, held.m.error_spacings + 0.2);
+  EXPECT_GT(reformed.m.inside_fraction, 0.97);
+  EXPECT_LT(reformed.m.splash_fraction, 0.01);
+  // Half strength softens the control but still holds the fluid in the sphere.
+  EXPECT_GT(soft.m.inside_fraction, 0.9);
 }
 
 TEST(Adaptive, IsIndependentOfTheThreadCount) {

@@ -90,6 +90,24 @@ TEST_P(Conformance, IsIndependentOfTheThreadCount) {
   }
 }
 
+// Strength 0 releases the fluid (issue 19 item 4): the controller then contributes exactly nothing, so every
+// registered controller given a target at strength 0 throughout steps the same bits as `none` (plain PBF), and binds
+// nothing.
+TEST_P(Conformance, AtStrengthZeroAddsExactlyNothing) {
+  const test::Case c = test::sphere_case();
+  control::StrengthTrack off;
+  off.keys = {{0.0, 0.0f}};
+  const auto none = test::simulate(c, spec_of("none"), 40);
+  const auto o = test::simulate(c, spec_of(GetParam()), 40, {}, {}, nullptr, off);
+  ASSERT_TRUE(o.ok && none.ok);
+  ASSERT_EQ(o.x.size(), none.x.size()) << GetParam();
+  for (std::size_t i = 0; i < o.x.size(); ++i) {
+    ASSERT_EQ(o.x[i], none.x[i]) << GetParam() << ": particle " << i;
+    ASSERT_EQ(o.v[i], none.v[i]) << GetParam() << ": particle " << i;
+    ASSERT_EQ(o.bound[i], kInvalidIndex) << GetParam() << ": particle " << i;
+  }
+}
+
 TEST_P(Conformance, UnknownOrOutOfRangeParametersAreAClearError) {
   const std::string name = GetParam();
   // An unknown key inside the controller's own parameter object (or, for `none`, which has none, the object itself).

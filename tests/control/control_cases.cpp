@@ -29,7 +29,8 @@ Case sphere_case() {
 }
 
 Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const control::TargetMotion& motion,
-                 const std::vector<std::pair<double, sampling::ControlSet>>& swaps, const Case* measure_against) {
+                 const std::vector<std::pair<double, sampling::ControlSet>>& swaps, const Case* measure_against,
+                 const control::StrengthTrack& strength) {
   Outcome o;
   sim::ParticleSet p;
   EXPECT_TRUE(sim::fill_sources(c.fluid, c.dom, c.sp.particle_radius, p).ok());
@@ -41,6 +42,7 @@ Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames,
   targets[0].set = c.set;
   targets[0].motion = motion;
   targets[0].swaps = swaps;
+  targets[0].strength = strength;
   o.control_count = c.set.size();
   auto ctl = control::make_controller(spec, std::move(targets), ctx);
   EXPECT_TRUE(ctl.has_value()) << (ctl ? "" : ctl.error().message);

@@ -33,9 +33,10 @@ struct Outcome {
   bool ok = true;                ///< every frame stepped without error
 };
 
-/// Runs `spec` on the case for `frames` frames of 1/60 s, then measures against `measure_against` (default: c).
+/// Runs `spec` on the case for `frames` frames of 1/60 s, then measures against `measure_against` (default: c). The
+/// target's control strength follows `strength` (no keys: 1).
 Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const control::TargetMotion& motion = {},
                  const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
-                 const Case* measure_against = nullptr);
+                 const Case* measure_against = nullptr, const control::StrengthTrack& strength = {});
 
 }  // namespace ff::test
