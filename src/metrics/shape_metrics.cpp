@@ -51,7 +51,7 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
   sampling::ignore_hidden_surfaces(grid);
 
   TargetShape shape;
-  shape.sdf_ = std::move(grid);
+  shape.sdf_ = std::make_shared<const sampling::SdfGrid>(std::move(grid));
   shape.grid_ = core::PointGrid(controls, d, box);
   shape.controls_ = core::PointTree(controls);
   shape.box_ = box;
@@ -60,14 +60,48 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
   return shape;
 }
 
+Result<TargetShape> TargetShape::posed(const TargetShape& bind, std::span<const Vec3f> posed_controls,
+                                       std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world) {
+  if (posed_controls.size() != bind.sample_count() || bind_from_world.size() != posed_controls.size())
+    return input_error(fmt::format("metrics: a posed shape needs one position and one matrix per sample ({}), got {} and {}",
+                                   bind.sample_count(), posed_controls.size(), bind_from_world.size()));
+  Aabb box;
+  for (std::size_t i = 0; i < posed_controls.size(); ++i) {
+    if (!posed_controls[i].allFinite() || !bind_from_world[i].allFinite())
+      return input_error(fmt::format("metrics: posed control sample {} has a non-finite position or pose", i));
+    box.extend(posed_controls[i]);
+  }
+  const float diagonal = box.size().norm();
+  if (!(diagonal > 0.0f))
+    return input_error("metrics: the posed control samples span no extent (a single point); E would be undefined");
+  TargetShape shape;
+  shape.sdf_ = bind.sdf_;
+  shape.bind_from_world_ = std::move(bind_from_world);
+  shape.grid_ = core::PointGrid(posed_controls, bind.control_spacing_, box);
+  shape.controls_ = core::PointTree(posed_controls);
+  shape.box_ = box;
+  shape.diagonal_ = diagonal;
+  shape.control_spacing_ = bind.control_spacing_;
+  return shape;
+}
+
+float TargetShape::signed_distance(const Vec3f& rest_point) const {
+  if (bind_from_world_.empty()) return sdf_->distance(rest_point);
+  if (!rest_point.allFinite()) return std::numeric_limits<float>::quiet_NaN();
+  const core::PointTree::Nearest nb = controls_.nearest(rest_point);
+  const Eigen::Matrix<float, 3, 4>& a = bind_from_world_[controls_.original(nb.slot)];
+  return sdf_->distance(a.leftCols<3>() * rest_point + a.col(3));
+}
+
 float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {
   const float d2 = grid_.nearest2(rest_point);
   return std::sqrt(std::isnan(d2) ? controls_.nearest(rest_point).distance2 : d2);
 }
 
 std::size_t TargetShape::bytes() const {
-  return sizeof(*this) - sizeof(sdf_) - sizeof(grid_) - sizeof(controls_) + sdf_.bytes() + grid_.bytes() +
-         controls_.bytes();
+  // A posed shape shares its bind shape's SDF: counted there, not again.
+  return sizeof(*this) - sizeof(grid_) - sizeof(controls_) + (bind_from_world_.empty() ? sdf_->bytes() : 0) +
+         grid_.bytes() + controls_.bytes() + bind_from_world_.size() * sizeof(bind_from_world_[0]);
 }
 
 FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,

@@ -26,7 +26,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <vector>
 
 namespace ff::metrics {
 
@@ -43,10 +45,21 @@ class TargetShape {
   static Result<TargetShape> build(const io::TriangleMesh& mesh, std::span<const Vec3f> controls,
                                    float control_spacing);
 
+  /// A skinned target's shape at one pose, cheap enough for every measured frame: the samples posed
+  /// (`posed_controls`, in the order `bind` was built with) give the grid, tree, box and L, and the signed distance is
+  /// `bind`'s, shared, reached through the inverse pose of the nearest posed sample: a point x is measured at
+  /// bind_from_world[i] · x, i its nearest posed sample. Where the skin moves rigidly that is the posed mesh's signed
+  /// distance exactly; across a blended joint it is the bind distance seen through the local blend (measured against
+  /// rebuilding the posed mesh's shape in skinned_target_test). Rebuilding costs the SDF grid and its winding numbers
+  /// (~2 s a frame for the 9k-sample character); this costs a grid and tree over the samples and one tree query per
+  /// fluid particle. Errors: Input for a size mismatch or a non-finite sample or matrix.
+  static Result<TargetShape> posed(const TargetShape& bind, std::span<const Vec3f> posed_controls,
+                                   std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world);
+
   /// Signed distance to the mesh surface (rest frame, m, negative inside) by trilinear interpolation of the grid; beyond
   /// the grid box (3 d_c from the mesh), the boundary value plus the distance to the box: positive, an upper
-  /// bound. NaN for a non-finite point.
-  float signed_distance(const Vec3f& rest_point) const { return sdf_.distance(rest_point); }
+  /// bound. NaN for a non-finite point. A posed shape (posed()) maps the point to the bind pose first.
+  float signed_distance(const Vec3f& rest_point) const;
   /// Exact Euclidean distance to the closest control sample (rest frame, m), at any range: the samples' grid
   /// when it can prove the answer, else their tree.
   float nearest_sample_distance(const Vec3f& rest_point) const;
@@ -61,11 +74,12 @@ class TargetShape {
 
   /// The control samples in cell order (their grid), for measure().
   const core::PointGrid& control_grid() const { return grid_; }
-  const sampling::SdfGrid& sdf() const { return sdf_; }
+  const sampling::SdfGrid& sdf() const { return *sdf_; }
 
  private:
   TargetShape() = default;
-  sampling::SdfGrid sdf_;
+  std::shared_ptr<const sampling::SdfGrid> sdf_;  // shared by a bind shape and its posed shapes
+  std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world_;  // posed shapes only: per sample, input order
   core::PointGrid grid_;
   core::PointTree controls_;
   Aabb box_;

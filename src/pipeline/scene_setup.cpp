@@ -2,6 +2,7 @@
 
 #include "pipeline/target_cache.h"
 #include "io/load_mesh.h"
+#include "core/parallel.h"
 #include "sampling/skin_weights.h"
 
 #include <fmt/format.h>
@@ -75,6 +76,7 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
     ct.set = std::move(tc.set);
     ct.start = static_cast<double>(scene.targets[i].start);
     ct.motion = motion;
+    ct.strength = control::StrengthTrack{scene.targets[i].strength};
     ct.swaps = std::move(swaps);
     if (const auto& skin = geometry[i].skin) {
       // Skin weights of the samples at the bind pose (sampling/skin_weights.h), and the posed target for the metrics.
@@ -96,7 +98,33 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
   return out;
 }
 
-Result<metrics::TargetShape> posed_shape(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
+Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& sk,
+                                         const control::Pose& pose, double time) {
+  std::vector<io::Mat4f> K;
+  sk.skin->world_joint_matrices(time, K);
+  control::PosedJoints joints;
+  joints.set(K, sk.skin->spec.skinning);
+  // The keyframed pose as one affine map: x ↦ pivot + translate + s R (x − pivot).
+  Eigen::Affine3f P = Eigen::Affine3f::Identity();
+  P.linear() = pose.scale * pose.rotation;
+  P.translation() = pose.pivot + pose.translate - P.linear() * pose.pivot;
+  const std::size_t m = sk.bind_samples.size();
+  std::vector<Vec3f> samples(m);
+  std::vector<Eigen::Matrix<float, 3, 4>> back(m);
+  core::parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
+    // World → bind through this sample's blended skin matrix (its linear blend; for dual-quaternion skinning the
+    // same joints' blend, which differs from it by far less than a spacing at the character's joint angles).
+    Eigen::Affine3f W;
+    W.matrix() = io::blend_matrix(K, sk.sample_joints[i], sk.sample_weights[i]);
+    W = P * W;
+    back[i] = W.inverse(Eigen::Affine).matrix().topRows<3>();
+  });
+  return metrics::TargetShape::posed(bind, samples, std::move(back));
+}
+
+Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
   std::vector<io::Mat4f> K;
   sk.skin->world_joint_matrices(time, K);
   control::PosedJoints joints;
@@ -127,7 +155,7 @@ ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std:
     const bool skinned = shapes[t].skinned && (shapes[t].from.size() < 2 || time < shapes[t].from[1]);
     std::optional<metrics::TargetShape> posed;
     if (skinned) {
-      auto s = posed_shape(*shapes[t].skinned, pose, time);
+      auto s = posed_shape(shapes[t].shape[0], *shapes[t].skinned, pose, time);
       if (s) posed = std::move(*s);
       else spdlog::warn("target {}: the posed target has no shape at t = {} s ({}); measured at rest", t, time, s.error().message);
     }

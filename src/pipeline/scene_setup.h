@@ -78,8 +78,14 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
                                         const std::filesystem::path& cache_dir,
                                         const std::filesystem::path& report_dir, core::Progress& progress);
 
-/// A skinned target's metric shape at `time`: its mesh and samples skinned, then posed by `pose` (its keyframes).
-Result<metrics::TargetShape> posed_shape(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
+/// A skinned target's metric shape at `time`, as every measured frame takes it: its samples skinned, then posed by
+/// `pose` (its keyframes), over `bind`'s signed distance reached through each sample's inverse skin matrix
+/// (metrics::TargetShape::posed). `bind`: the target's shape at the bind pose (TargetShapes::shape[0]).
+Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& skinned,
+                                         const control::Pose& pose, double time);
+/// The same shape rebuilt from the posed mesh (its own SDF grid and winding numbers: ~2 s for the 9k-sample character):
+/// the reference posed_shape is measured against.
+Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
 
 /// The N_c-weighted shape metrics of one frame, and each target's own.
 struct ShapeMeasure {
