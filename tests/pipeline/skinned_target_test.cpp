@@ -8,7 +8,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -129,7 +131,8 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
 TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
   const fs::path glb = character_glb();
   ASSERT_FALSE(glb.empty());
-  std::printf("%-14s %-16s %12s %14s %14s\n", "weights", "skinning", "kept inside", "mean |dNN|/d", "p99 |dNN|/d");
+  std::printf("%-14s %-16s %12s %14s %14s %9s %9s\n", "weights", "skinning", "kept inside", "mean |dNN|/d", "p99 |dNN|/d",
+              "rho p1", "rho p99");
   for (const auto weights : {control::SkinWeightSource::ClosestPoint, control::SkinWeightSource::Diffusion}) {
     scene::Scene scene;
     scene::TargetSpec t;
@@ -162,7 +165,7 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
       nn_bind[i] = std::sqrt(best), nn_of[i] = who;
     }
     for (const auto method : {control::SkinningMethod::Linear, control::SkinningMethod::DualQuaternion}) {
-      double worst_kept = 1.0, worst_mean = 0.0, worst_p99 = 0.0;
+      double worst_kept = 1.0, worst_mean = 0.0, worst_p99 = 0.0, rho_p1 = 1.0, rho_p99 = 1.0;
       for (int k = 1; k <= 4; ++k) {
         const double time = 1.1 * k / 4.0 * 0.999;
         std::vector<io::Mat4f> K;
@@ -186,14 +189,30 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
         for (double c : change) mean += c;
         mean /= double(change.size());
         std::sort(change.begin(), change.end());
+        // How the pose compresses or stretches the samples: each one's Poly6 kernel sum over the others within
+        // H_c = 3 d_c, posed against bind (what ρ_c would become if it followed the pose).
+        const float h = 3.0f * sk.spacing, h2 = h * h;
+        const auto kernel_sum = [&](const std::vector<Vec3f>& pts, std::size_t i) {
+          double sum = 0.0;
+          for (std::size_t j = 0; j < pts.size(); ++j) {
+            const float r2 = (pts[j] - pts[i]).squaredNorm();
+            if (r2 < h2) sum += std::pow(double(h2 - r2), 3.0);
+          }
+          return sum;
+        };
+        std::vector<double> ratio(x.size());
+        for (std::size_t i = 0; i < x.size(); ++i) ratio[i] = kernel_sum(x, i) / kernel_sum(sk.bind_samples, i);
+        std::sort(ratio.begin(), ratio.end());
+        rho_p1 = std::min(rho_p1, ratio[ratio.size() / 100]);
+        rho_p99 = std::max(rho_p99, ratio[ratio.size() * 99 / 100]);
         worst_kept = std::min(worst_kept, double(kept) / double(in));
         worst_mean = std::max(worst_mean, mean);
         worst_p99 = std::max(worst_p99, change[change.size() * 99 / 100]);
       }
-      std::printf("%-14s %-16s %11.2f%% %14.4f %14.4f\n",
+      std::printf("%-14s %-16s %11.2f%% %14.4f %14.4f %9.3f %9.3f\n",
                   weights == control::SkinWeightSource::Diffusion ? "diffusion" : "closest_point",
                   method == control::SkinningMethod::Linear ? "linear" : "dual_quaternion", 100.0 * worst_kept, worst_mean,
-                  worst_p99);
+                  worst_p99, rho_p1, rho_p99);
       EXPECT_GE(worst_kept, 0.99);
     }
   }
