@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""What a skinned target's posing adds to a formed frame (issue 19: ≤ 10 % of a formed 10k frame). The demo character
+(examples/generated/character.glb, ~9k control samples, as examples/character.json) twice in one process: playing its
+`walk` clip (samples skinned every sub-step, metrics against the posed target) and standing still in its bind pose
+(the same mesh, samples and fluid, no clip). Both are stepped to `--formed` frames, then frame by frame in turn:
+  solver   the solver's own time for the frame (LiveFrame.step_seconds: posing the samples every sub-step included)
+  frame    the wall time of sim.step(metrics=True): the solver and the shape metrics (posed target included)
+and the ratios animated / still of their medians, per round and over rounds. The animated fluid also moves (the walk
+throws it about), so the ratio is an upper bound of what posing alone costs.
+usage: PYTHONPATH=build/release/python python3 bench/bench_posing.py [--formed 180] [--frames 60] [--rounds 3]
+"""
+import argparse
+import json
+import os
+import pathlib
+import statistics
+import tempfile
+import time
+
+import fluidform as ff
+
+root = pathlib.Path(__file__).resolve().parents[1]
+ap = argparse.ArgumentParser()
+ap.add_argument("--formed", type=int, default=180, help="frames stepped before timing (the walk forms by ~2.5 s)")
+ap.add_argument("--frames", type=int, default=60, help="timed frames per round and scene")
+ap.add_argument("--rounds", type=int, default=3)
+a = ap.parse_args()
+glb = root / "examples" / "generated" / "character.glb"
+if not glb.exists():
+    raise SystemExit(f"bench_posing: {glb} is missing (scripts/setup writes it)")
+
+rows = []
+with tempfile.TemporaryDirectory() as tmp:
+    scenes = {}
+    for name, target in (("animated", {"mesh": str(glb), "animation": {"clip": "walk"}}), ("still", {"mesh": str(glb)})):
+        path = os.path.join(tmp, f"{name}.json")
+        with open(path, "w") as f:
+            json.dump({"targets": [target]}, f)
+        scenes[name] = path
+    for r in range(a.rounds):
+        sims = {k: ff.Simulation(p, cache_dir=os.path.join(tmp, "cache")) for k, p in scenes.items()}
+        for s in sims.values():
+            s.step(a.formed, metrics=False)
+        solver = {k: [] for k in sims}
+        frame = {k: [] for k in sims}
+        substeps = {k: [] for k in sims}
+        last = {}
+        for _ in range(a.frames):
+            for k, s in sims.items():
+                t0 = time.perf_counter()
+                info = s.step(metrics=True)
+                frame[k].append(time.perf_counter() - t0)
+                solver[k].append(info["step_seconds"])
+                substeps[k].append(info["substeps"])
+                last[k] = info
+        med = {f"{k}_{what}_ms": 1e3 * statistics.median(v[k]) for k in sims for what, v in (("solver", solver), ("frame", frame))}
+        med["particles"] = len(sims["animated"].positions)
+        for k in sims:
+            med[f"{k}_substeps"] = statistics.mean(substeps[k])
+            med[f"{k}_per_substep_ms"] = 1e3 * sum(solver[k]) / sum(substeps[k])
+        med["E_animated"] = last["animated"].get("error_rate", float("nan"))
+        med["E_still"] = last["still"].get("error_rate", float("nan"))
+        rows.append(med)
+
+print("| round | particles | animated solver ms | still solver ms | ratio | animated frame ms | still frame ms | ratio | E animated % | E still % |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for i, x in enumerate(rows):
+    print(f"| {i} | {x['particles']} | {x['animated_solver_ms']:.1f} | {x['still_solver_ms']:.1f} | "
+          f"{x['animated_solver_ms'] / x['still_solver_ms']:.3f} | {x['animated_frame_ms']:.1f} | {x['still_frame_ms']:.1f} | "
+          f"{x['animated_frame_ms'] / x['still_frame_ms']:.3f} | {x['E_animated']:.3f} | {x['E_still']:.3f} |")
+m = {k: statistics.median(x[k] for x in rows) for k in rows[0]}
+print("medians: " + json.dumps({k: round(v, 3) for k, v in m.items()}))
+print(f"animated / still, solver: {m['animated_solver_ms'] / m['still_solver_ms']:.3f}; "
+      f"frame with metrics: {m['animated_frame_ms'] / m['still_frame_ms']:.3f}; sub-steps per frame "
+      f"{m['animated_substeps']:.2f} vs {m['still_substeps']:.2f}; per sub-step: "
+      f"{m['animated_per_substep_ms'] / m['still_per_substep_ms']:.3f}")
