@@ -6,8 +6,7 @@
 // importer and Assimp pose it differently (bounds 3–7.5 % of its size apart at four clip times), so neither is a
 // reference for the other there. Skipped, saying so, where Blender is not installed.
 #include "io/load_mesh.h"
-#include "pipeline/auto_scene.h"
-#include "pipeline/scene_setup.h"
+#include "pipeline/skinned_setup.h"
 #include "sampling/mesh_field.h"
 #include "support/test_support.h"
 
@@ -48,20 +47,9 @@ TEST_P(SkinnedBlender, PosedSamplesLieInsideBlendersPoseOfTheSameClip) {
                                       test::source_dir().string(), file.string()).c_str()), 0);
   }
   ASSERT_TRUE(fs::exists(file)) << file;
-  scene::Scene scene;
-  scene::TargetSpec t;
-  t.mesh = file;
-  t.transform.scale = Vec3f::Constant(c.scale);
-  t.animation.clip = c.clip;
-  scene.targets.push_back(t);
-  scene.auto_radius = true;
-  scene.sampling.auto_count = 4000;
-  auto geometry = load_target_meshes(scene);
-  ASSERT_TRUE(geometry.has_value()) << geometry.error().message;
-  ASSERT_TRUE(complete_scene(scene, *geometry).ok());
-  auto setup = setup_targets(scene, *geometry, dir / "cache", dir, core::null_progress());
+  auto setup = test::skinned_setup(file, c.clip, c.scale, dir);
   ASSERT_TRUE(setup.has_value()) << setup.error().message;
-  const auto& sk = *setup->shapes[0].skinned;
+  const auto& sk = setup->skinned();
   auto bind_field = sampling::MeshField::build(sk.bind_mesh);
   ASSERT_TRUE(bind_field.has_value());
   std::vector<double> times;

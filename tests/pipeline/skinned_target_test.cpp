@@ -2,6 +2,7 @@
 // on the demo character and assimp-testmodels' skinned files.
 #include "pipeline/auto_scene.h"
 #include "pipeline/scene_setup.h"
+#include "pipeline/skinned_setup.h"
 #include "sampling/mesh_field.h"
 #include "support/test_support.h"
 
@@ -228,23 +229,12 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
 TEST(SkinnedMetrics, TheBindPoseMappingAgreesWithTheRebuiltPosedShape) {
   const fs::path glb = character_glb();
   ASSERT_FALSE(glb.empty()) << "scripts/make_character.py failed";
-  scene::Scene scene;
-  scene::TargetSpec t;
-  t.mesh = glb;
-  t.animation.clip = "walk";
-  scene.targets.push_back(t);
-  scene.auto_radius = true;
-  scene.sampling.auto_count = 4000;
-  auto geometry = load_target_meshes(scene);
-  ASSERT_TRUE(geometry.has_value()) << geometry.error().message;
-  ASSERT_TRUE(complete_scene(scene, *geometry).ok());
-  auto setup = setup_targets(scene, *geometry, test::temp_dir("posed-metrics-cache"), test::temp_dir("posed-metrics-rep"),
-                             core::null_progress());
+  auto setup = test::skinned_setup(glb, "walk", 1.0f, test::temp_dir("posed-metrics"));
   ASSERT_TRUE(setup.has_value()) << setup.error().message;
-  const TargetShapes& shapes = setup->shapes[0];
-  const auto& sk = *shapes.skinned;
-  const float r = scene.solver.particle_radius, d = 2.0f * r;
-  const control::Pose pose = setup->motions[0].at(0.0);
+  const TargetShapes& shapes = setup->setup.shapes[0];
+  const auto& sk = setup->skinned();
+  const float r = setup->scene.solver.particle_radius, d = 2.0f * r;
+  const control::Pose pose = setup->setup.motions[0].at(0.0);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-2.0f * d, 2.0f * d);
   double fast_s = 0, rebuilt_s = 0;
