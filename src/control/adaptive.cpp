@@ -96,9 +96,11 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   // Every part of the control scales with its target's strength (1: as written; 0: the target is inactive, below).
   strength_.resize(samples_.targets());
   softened_ = false;
+  target_moving_.resize(samples_.targets());
   for (std::size_t t = 0; t < strength_.size(); ++t) {
     strength_[t] = samples_.strength(static_cast<std::uint8_t>(t), time_);
     softened_ = softened_ || (strength_[t] > 0.0f && strength_[t] < 1.0f);
+    target_moving_[t] = samples_.moving(static_cast<std::uint8_t>(t)) ? 1 : 0;
   }
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
@@ -302,7 +304,7 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
       const auto j = static_cast<std::size_t>(jj);
       if (bond_off_[j] == bond_off_[j + 1]) return;
-      if (follow) {
+      if (follow && target_moving_[p.target[j]]) {  // a static target's fluid (u_c = 0) is not damped
         const float s = softened_ ? strength_[p.target[j]] : 1.0f;
         const Vec3f u = samples_.velocity[nearest_[j]];
         a[j] += (s * k / dt) * (u - (v[j] + dt * a[j]));

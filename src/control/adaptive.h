@@ -83,6 +83,7 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   double time_ = 0.0;
   std::vector<float> strength_;     // per target: its control strength in this sub-step (control/strength.h)
   bool softened_ = false;           // some target acts with a strength below 1
+  std::vector<std::uint8_t> target_moving_;  // per target: it moves (follow applies to its fluid)
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
   std::vector<float> fill_, bond_radius2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; bond radius H_c*²; λ

@@ -44,6 +44,10 @@ class ControlSamples {
   /// Whether target `t` acts at all at `at` (started, strength above 0): a target that does not adds nothing.
   bool acting(std::uint8_t t, double at) const { return strength(t, at) > 0.0f; }
   bool moving() const { return moving_; }
+  /// Whether target `t` moves (keyframes, a skin, or a live pose): its samples have a pose velocity u_c.
+  bool moving(std::uint8_t t) const {
+    return t < motion_.size() && (motion_[t].moving() || (skin_[t] && current_[t] == 0));
+  }
 
   float hc = 0.0f;  ///< H_c of every sample
   // Flattened samples of every target's current phase.
