@@ -140,7 +140,7 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
                                       c & 4 ? t.box.max.z() : t.box.min.z())));
       }
       // A skinned target's limbs swing out of its bind box (a walk's feet and hands by 0.2 m): the domain holds its
-      // posed mesh at 128 times of the clip's first play (then the keyframed pose at that time), so no limb meets a
+      // posed mesh at 129 times of the clip's first play (then the keyframed pose at that time), so no limb meets a
       // wall. Without this the walking character pressed its hands and feet flat against the walls, and 10 % of its
       // fluid stayed there.
       if (t.skin) {

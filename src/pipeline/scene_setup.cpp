@@ -114,8 +114,8 @@ Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const
   core::parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
-    // World → bind through this sample's blended skin matrix (its linear blend; for dual-quaternion skinning the
-    // same joints' blend, which differs from it by far less than a spacing at the character's joint angles).
+    // World → bind through this sample's blended skin matrix (its linear blend; for dual-quaternion skinning this
+    // linear blend of the same joints stands in for the rigid one, an approximation not measured separately).
     Eigen::Affine3f W;
     W.matrix() = io::blend_matrix(K, sk.sample_joints[i], sk.sample_weights[i]);
     W = P * W;
