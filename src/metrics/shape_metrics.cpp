@@ -57,6 +57,7 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
   shape.box_ = box;
   shape.diagonal_ = diagonal;
   shape.control_spacing_ = d;
+  shape.sheet_ = !field.encloses_volume();
   return shape;
 }
 
@@ -82,15 +83,21 @@ Result<TargetShape> TargetShape::posed(const TargetShape& bind, std::span<const 
   shape.box_ = box;
   shape.diagonal_ = diagonal;
   shape.control_spacing_ = bind.control_spacing_;
+  shape.sheet_ = bind.sheet_;
   return shape;
 }
 
 float TargetShape::signed_distance(const Vec3f& rest_point) const {
-  if (bind_from_world_.empty()) return sdf_->distance(rest_point);
-  if (!rest_point.allFinite()) return std::numeric_limits<float>::quiet_NaN();
-  const core::PointTree::Nearest nb = controls_.nearest(rest_point);
-  const Eigen::Matrix<float, 3, 4>& a = bind_from_world_[controls_.original(nb.slot)];
-  return sdf_->distance(a.leftCols<3>() * rest_point + a.col(3));
+  float d;
+  if (bind_from_world_.empty()) {
+    d = sdf_->distance(rest_point);
+  } else {
+    if (!rest_point.allFinite()) return std::numeric_limits<float>::quiet_NaN();
+    const core::PointTree::Nearest nb = controls_.nearest(rest_point);
+    const Eigen::Matrix<float, 3, 4>& a = bind_from_world_[controls_.original(nb.slot)];
+    d = sdf_->distance(a.leftCols<3>() * rest_point + a.col(3));
+  }
+  return sheet_ ? std::abs(d) - 0.5f * control_spacing_ : d;
 }
 
 float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {

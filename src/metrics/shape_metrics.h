@@ -59,7 +59,13 @@ class TargetShape {
   /// Signed distance to the mesh surface (rest frame, m, negative inside) by trilinear interpolation of the grid; beyond
   /// the grid box (3 d_c from the mesh), the boundary value plus the distance to the box: positive, an upper
   /// bound. NaN for a non-finite point. A posed shape (posed()) maps the point to the bind pose first.
+  /// An open sheet (a mesh that encloses no volume: its samples are one surface layer, and the fluid was sized as one
+  /// particle per sample) is measured as the slab one sample spacing thick that its samples stand for: |distance to the
+  /// sheet| − d_c/2, so inside and splash mean for it what they mean for a solid. Its grid's own sign says nothing
+  /// (a winding number of ±1/2 either side of an open sheet).
   float signed_distance(const Vec3f& rest_point) const;
+  /// Whether the target is an open sheet (above).
+  bool sheet() const { return sheet_; }
   /// Exact Euclidean distance to the closest control sample (rest frame, m), at any range: the samples' grid
   /// when it can prove the answer, else their tree.
   float nearest_sample_distance(const Vec3f& rest_point) const;
@@ -83,6 +89,7 @@ class TargetShape {
   core::PointGrid grid_;
   core::PointTree controls_;
   Aabb box_;
+  bool sheet_ = false;
   float diagonal_ = 0.0f;
   float control_spacing_ = 0.0f;
 };

@@ -84,7 +84,21 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
     volume = 0.0;
     for (std::size_t k = 0; k < targets.size(); ++k) {
       auto& t = targets[k];
-      if (!(t.volume > 0.0)) continue;
+      if (!(t.volume > 0.0)) {
+        // An open sheet (glTF2/simple_skin, a cloth, a terrain patch) is sampled as one layer of surface samples:
+        // its fluid is one particle per sample, a layer one spacing thick that takes the sheet's shape.
+        if (t.area > 0.0) {
+          const double count = sampling::estimate_sample_count(false, 0.0, t.area, dc);
+          if (count > 1.5 * double(s.sampling.max_samples))
+            return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more "
+                                           "than the limit of {} (sampling.max_samples); increase solver.particle_radius "
+                                           "or sampling.spacing",
+                                           k, dc, count, s.sampling.max_samples));
+          t.volume = count * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+          volume += t.volume;
+        }
+        continue;
+      }
       // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
       // will accept before allocating it (a tiny particle_radius would otherwise exhaust the memory here).
       if (const double rough = sampling::estimate_sample_count(true, t.volume, t.area, dc);
@@ -106,7 +120,7 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   }
   if (s.fluid.empty()) {
     if (!(volume > 0.0))
-      return input_error("the targets enclose no volume, so the fluid cannot be sized from them: add a \"fluid\" list");
+      return input_error("the targets have no volume and no area, so the fluid cannot be sized from them: add a \"fluid\" list");
     for (const auto& t : targets) {
       if (!(t.volume > 0.0)) continue;
       // A column over the middle of the target's footprint holding the target's volume, a spacing above it.
