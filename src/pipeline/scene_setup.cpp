@@ -124,6 +124,19 @@ Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const
   return metrics::TargetShape::posed(bind, samples, std::move(back));
 }
 
+std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {
+  std::vector<io::Mat4f> K;
+  sk.skin->world_joint_matrices(time, K);
+  control::PosedJoints joints;
+  joints.set(std::move(K), method);
+  std::vector<Vec3f> x(sk.bind_samples.size());
+  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    x[i] = joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]);
+  });
+  return x;
+}
+
 Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
   std::vector<io::Mat4f> K;
   sk.skin->world_joint_matrices(time, K);

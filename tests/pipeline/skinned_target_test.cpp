@@ -105,11 +105,12 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
       posed.vertices[v] = joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]);
     auto field = sampling::MeshField::build(posed);
     ASSERT_TRUE(field.has_value());
+    const std::vector<Vec3f> x = posed_samples(sk, time, control::SkinningMethod::Linear);
     if (sheet) {
       // A sheet's samples lie on it: posed, they stay on the posed sheet.
       float worst = 0.0f;
       for (std::size_t i = 0; i < sk.bind_samples.size(); ++i)
-        worst = std::max(worst, field->unsigned_distance(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i])));
+        worst = std::max(worst, field->unsigned_distance(x[i]));
       std::printf("%s t=%.3f: posed samples within %.4f m (%.2f d_c) of the posed sheet\n", c.name.c_str(), time, worst,
                   worst / sk.spacing);
       EXPECT_LE(worst, c.sheet_tolerance * sk.spacing) << c.name << " at t = " << time;
@@ -117,11 +118,14 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
     }
     std::size_t kept = 0;
     for (std::size_t i = 0; i < sk.bind_samples.size(); ++i)
-      if (in_bind[i]) kept += field->inside(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
+      if (in_bind[i]) kept += field->inside(x[i]);
     const double frac = double(kept) / double(n_in);
     const Vec3f size = field->bounds().size();
-    std::printf("%s t=%.3f: %.2f %% of the samples inside at bind are inside the posed mesh; its size %.3f %.3f %.3f\n",
-                c.name.c_str(), time, 100.0 * frac, size.x(), size.y(), size.z());
+    // The posed mesh's own volume against its bind volume: linear blend skinning of a coarse mesh caves in at the
+    // bends (huesitos loses 9-12 % at two of these times), and samples that keep their volume cannot all fit inside.
+    std::printf("%s t=%.3f: %.2f %% of the samples inside at bind are inside the posed mesh; its size %.3f %.3f %.3f, "
+                "its volume %.1f %% of the bind mesh's\n",
+                c.name.c_str(), time, 100.0 * frac, size.x(), size.y(), size.z(), 100.0 * field->volume() / bind_field->volume());
     EXPECT_GE(frac, c.keep_inside) << c.name << " at t = " << time;
   }
 }
@@ -178,8 +182,7 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
           posed.vertices[v] = joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]);
         auto field = sampling::MeshField::build(posed);
         ASSERT_TRUE(field.has_value());
-        std::vector<Vec3f> x(sk.bind_samples.size());
-        for (std::size_t i = 0; i < x.size(); ++i) x[i] = joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]);
+        const std::vector<Vec3f> x = posed_samples(sk, time, method);
         std::size_t in = 0, kept = 0;
         std::vector<double> change(x.size());
         for (std::size_t i = 0; i < x.size(); ++i) {
