@@ -41,7 +41,8 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
 
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
 /// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at
-/// the sampling spacing, sparse-sampling drops removed), which is what the fluid is sized and shared by.
+/// the sampling spacing, sparse-sampling drops removed; an open sheet's: one spacing³ per surface sample), which is what
+/// the fluid is sized and shared by.
 Status complete_scene(scene::Scene& scene, std::vector<TargetGeometry>& targets);
 
 /// Shares the fluid out among the targets by volume (METHOD: "fluid is shared out by volume"): target t gets
