@@ -81,6 +81,13 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
     // spacing (the union of overlapping parts, not the sum a divergence-theorem volume gives), less what the
     // sparse-sampling options remove.
     const float dc = s.sampling.spacing > 0.0f ? s.sampling.spacing : d;
+    // Sizes are checked before anything is allocated for them (a tiny particle_radius would exhaust the memory).
+    const auto too_many = [&](std::size_t k, double count) {
+      return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
+                                     "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
+                                     "sampling.spacing",
+                                     k, dc, count, s.sampling.max_samples));
+    };
     volume = 0.0;
     for (std::size_t k = 0; k < targets.size(); ++k) {
       auto& t = targets[k];
@@ -89,24 +96,17 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
         // its fluid is one particle per sample, a layer one spacing thick that takes the sheet's shape.
         if (t.area > 0.0) {
           const double count = sampling::estimate_sample_count(false, 0.0, t.area, dc);
-          if (count > 1.5 * double(s.sampling.max_samples))
-            return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more "
-                                           "than the limit of {} (sampling.max_samples); increase solver.particle_radius "
-                                           "or sampling.spacing",
-                                           k, dc, count, s.sampling.max_samples));
+          if (count > 1.5 * double(s.sampling.max_samples)) return too_many(k, count);
           t.volume = count * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
           volume += t.volume;
         }
         continue;
       }
       // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
-      // will accept before allocating it (a tiny particle_radius would otherwise exhaust the memory here).
+      // will accept before allocating it.
       if (const double rough = sampling::estimate_sample_count(true, t.volume, t.area, dc);
           rough > 1.5 * double(s.sampling.max_samples))
-        return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
-                                       "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
-                                       "sampling.spacing",
-                                       k, dc, rough, s.sampling.max_samples));
+        return too_many(k, rough);
       std::size_t kept = 0;
       for (const Vec3f& x : sampling::voxel_samples(*t.field, dc)) {
         bool dropped = false;

@@ -85,9 +85,10 @@ Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const
                                          const control::Pose& pose, double time);
 /// The same shape rebuilt from the posed mesh (its own SDF grid and winding numbers: ~2 s for the 9k-sample character):
 /// the reference posed_shape is measured against.
+Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
+
 /// A skinned target's samples at `time` (no keyframed pose) as the controllers pose them, skinned by `method`.
 std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& skinned, double time, control::SkinningMethod method);
-Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
 
 /// The N_c-weighted shape metrics of one frame, and each target's own.
 struct ShapeMeasure {

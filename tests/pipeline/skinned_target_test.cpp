@@ -67,7 +67,7 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   if (std::getenv("FF_W")) t.animation.weights = control::SkinWeightSource::ClosestPoint;
   scene.targets.push_back(t);
   scene.auto_radius = true;
-  if (c.name == "simple_skin") {  // a sheet: it sizes no fluid, so the scene gives a box of it
+  if (c.name == "simple_skin") {  // a sheet: its own fluid box and spacing, which its sheet tolerance was measured at
     sim::FluidSource box;
     box.max = Vec3f(1.0f, 1.0f, 1.0f);
     scene.fluid.push_back(box);
