@@ -5,8 +5,11 @@
 //      JoinIdenticalVertices) std::sorts positions and NaN keys make that undefined behaviour.
 //   2. ApplyPostProcessing: validate, triangulate, keep positions only, weld identical positions, bake node
 //      transforms (merging the meshes), split by primitive type.
-// Then the triangle meshes are merged (indices offset), options.transform is applied, degenerate triangles
-// are dropped and unreferenced vertices removed. No unit or global scaling: units stay as in the file.
+// Then the triangle meshes are merged (indices offset). Those two phases and the merge run in a child process
+// (options.isolate, io/isolate.h), which sends the merged mesh back: Assimp 5.2.5 corrupts its heap on some malformed
+// files (its OBJ line and face arrays, among others), and no check of ours can foresee every such bug. Back in this
+// process options.transform is applied, degenerate triangles are dropped and unreferenced vertices removed. No unit
+// or global scaling: units stay as in the file.
 // Before Assimp sees a file (check_before_assimp), OFF and PLY headers are checked against the file size
 // (check_declared_counts: Assimp 5.2.5 allocates whatever they declare), a PLY header must have its end_header
 // (without one Assimp 5.2.5 never returns), and an OFF file's lines must not overrun Assimp's OFF reader
@@ -14,6 +17,7 @@
 #include "io/load_mesh.h"
 
 #include "core/printable.h"
+#include "io/isolate.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
@@ -29,6 +33,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <new>
@@ -158,6 +163,7 @@ bool read_as_off(const fs::path& path, std::string_view head) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   std::size_t i = 0;
+  if (head.starts_with("\xEF\xBB\xBF")) head.remove_prefix(3);
   return ext == ".off" || is_off_keyword(next_token(head, i));
 }
 
@@ -230,6 +236,14 @@ Status check_off_lines(const fs::path& path, std::string_view text) {
   number(p);  // edges
   token();
   if (vertices == 0 || faces == 0) return {};  // Assimp refuses these itself
+  // The counts as Assimp reads them (after a byte order mark, wrapped to 32 bits), which is what it allocates for
+  // before reading a line: each vertex and each face takes at least one byte of the file.
+  if (vertices > text.size())
+    return file_error(path, fmt::format("header declares {} vertices, more than a {}-byte file can hold", vertices,
+                                        text.size()));
+  if (faces > text.size())
+    return file_error(path, fmt::format("header declares {} faces, more than a {}-byte file can hold", faces,
+                                        text.size()));
 
   std::string_view line;
   for (std::uint32_t v = 0; v < vertices && next_line(line);) ++v;
@@ -255,9 +269,10 @@ Status check_off_lines(const fs::path& path, std::string_view text) {
 /// of the file, so a declared count above the file size is refused here, before Assimp sees the file.
 /// `h`: the first kHeaderBytes of the file (or all of it).
 Status check_declared_counts(const fs::path& path, std::string_view h, std::uintmax_t file_size) {
-  auto too_many = [&](std::uint64_t n, std::string_view what) {
+  auto too_many = [&](std::uint64_t n, std::string_view what) {  // parse_count saturates at 2^64 - 1
+    const std::string count = n == UINT64_MAX ? std::string("over 2^64") : fmt::format("{}", n);
     return file_error(path,
-                      fmt::format("header declares {} {}, more than a {}-byte file can hold", n, what, file_size));
+                      fmt::format("header declares {} {}, more than a {}-byte file can hold", count, what, file_size));
   };
 
   // PLY: Assimp takes any first line that starts with "ply" or "PLY" (in any case) for its magic.
@@ -277,13 +292,14 @@ Status check_declared_counts(const fs::path& path, std::string_view h, std::uint
       if (const auto n = parse_count(next_token(line, i)); n && *n > file_size)
         return too_many(*n, fmt::format("'{}' elements", printable(name)));
     }
-    // Assimp 5.2.5 reads a header without its end_header line for ever: "end_header" must start a line and end
-    // there (or at a space).
+    // Assimp 5.2.5 reads a header without its end_header line for ever: "end_header" must start a line and be
+    // followed by what its TokenMatch takes for a token's end (IsSpaceOrNewLine: space, tab, \r, \n, \f or NUL;
+    // not a vertical tab, after which it hangs).
+    const auto token_end = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\0'; };
     bool end_header = false;
     for (std::size_t k = h.find("end_header"); k != std::string_view::npos && !end_header; k = h.find("end_header", k + 1)) {
       const std::size_t after = k + 10;
-      end_header = k > 0 && (h[k - 1] == '\n' || h[k - 1] == '\r') &&
-                   (after == h.size() || h[after] == '\0' || std::isspace(static_cast<unsigned char>(h[after])));
+      end_header = k > 0 && (h[k - 1] == '\n' || h[k - 1] == '\r') && (after == h.size() || token_end(h[after]));
     }
     if (!end_header)
       return file_error(path, fmt::format("PLY header has no end_header line{}",
@@ -293,6 +309,7 @@ Status check_declared_counts(const fs::path& path, std::string_view h, std::uint
 
   // OFF: optional keyword (and dimension for nOFF), then "<vertices> <faces> <edges>".
   if (!read_as_off(path, h)) return {};
+  if (h.starts_with("\xEF\xBB\xBF")) h.remove_prefix(3);  // Assimp drops a UTF-8 byte order mark
   std::size_t i = 0;
   std::string_view t = next_token(h, i);
   const bool keyword = is_off_keyword(t);
@@ -433,6 +450,9 @@ Status check_options(const fs::path& path, const LoadOptions& options) {
   if (!(options.max_vertices >= 1 && options.max_vertices <= kMaxMeshVertices))
     return param_error(fmt::format("{}: max_vertices = {} is outside [1, {}]", shown(path), options.max_vertices,
                                    kMaxMeshVertices));
+  if (!(options.import_timeout_s > 0.0 && options.import_timeout_s <= 86400.0))
+    return param_error(fmt::format("{}: import_timeout_s = {} is outside (0, 86400]", shown(path),
+                                   options.import_timeout_s));
   return {};
 }
 
@@ -443,9 +463,10 @@ void configure(Assimp::Importer& importer) {
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
 }
 
-/// Everything after Assimp's import (`scene`: what ReadFile or ReadFileFromMemory returned).
-Result<TriangleMesh> finish_import(const fs::path& path, Assimp::Importer& importer, const aiScene* scene,
-                                   const LoadOptions& options, MeshLoadStats& stats) {
+/// Assimp's part (`scene`: what ReadFile or ReadFileFromMemory returned): the raw scene's checks, post-processing,
+/// and the merge into one triangle mesh (node transforms baked, not yet checked for overflow).
+Result<TriangleMesh> import_triangles(const fs::path& path, Assimp::Importer& importer, const aiScene* scene,
+                                      std::size_t max_vertices, MeshLoadStats& stats) {
   if (scene == nullptr) return file_error(path, assimp_reason(importer, "cannot be read (no reason given)"));
   stats.source_meshes = scene->mNumMeshes;
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr) return file_error(path, "contains no meshes");
@@ -453,10 +474,108 @@ Result<TriangleMesh> finish_import(const fs::path& path, Assimp::Importer& impor
 
   scene = importer.ApplyPostProcessing(kPostProcess);
   if (scene == nullptr) return file_error(path, assimp_reason(importer, "post-processing failed (no reason given)"));
+  return merged_triangles(path, *scene, max_vertices, stats);
+}
 
-  FF_TRY(TriangleMesh mesh, merged_triangles(path, *scene, options.max_vertices, stats));
-  importer.FreeScene();  // the merged copy is all that is needed from here on
+// ---- the import in a child process (io/isolate.h): its answer as bytes ----
+//
+// The statistics (source meshes, dropped non-triangles: two uint64), then one byte, 1 for a mesh, 0 for an error.
+// An error: its kind (one byte) and message. A mesh: vertex count nv and triangle count nt (two uint64), then
+// nv × 3 floats and nt × 3 uint32 indices.
 
+template <class T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+template <class T>
+bool get(std::string_view& in, T& v) {
+  if (in.size() < sizeof v) return false;
+  std::memcpy(&v, in.data(), sizeof v);
+  in.remove_prefix(sizeof v);
+  return true;
+}
+
+std::string encode(const Result<TriangleMesh>& r, const MeshLoadStats& stats) {
+  std::string out;
+  put(out, std::uint64_t{stats.source_meshes});
+  put(out, std::uint64_t{stats.dropped_non_triangles});  // counted on the way to an error too
+  if (!r) {
+    put(out, std::uint8_t{0});
+    put(out, static_cast<std::uint8_t>(r.error().kind));
+    out += r.error().message;
+    return out;
+  }
+  const TriangleMesh& m = r.value();
+  put(out, std::uint8_t{1});
+  put(out, std::uint64_t{m.vertices.size()});
+  put(out, std::uint64_t{m.triangles.size()});
+  out.reserve(out.size() + 12 * (m.vertices.size() + m.triangles.size()));
+  for (const Vec3f& v : m.vertices) put(out, v.x()), put(out, v.y()), put(out, v.z());
+  for (const auto& t : m.triangles) put(out, t[0]), put(out, t[1]), put(out, t[2]);
+  return out;
+}
+
+/// The child's answer back into a mesh; every count is checked against the bytes that came, and every index
+/// against the vertices, since a child whose heap Assimp corrupted may still have answered.
+Result<TriangleMesh> decode(const fs::path& path, std::string_view in, std::size_t max_vertices,
+                            MeshLoadStats& stats) {
+  const Error garbled = file_error(path, "the import process sent a garbled answer");
+  std::uint64_t meshes = 0, other = 0;
+  std::uint8_t ok = 0;
+  if (!get(in, meshes) || !get(in, other) || !get(in, ok)) return garbled;
+  stats.source_meshes = meshes;
+  stats.dropped_non_triangles = other;
+  if (ok == 0) {
+    std::uint8_t kind = 0;
+    if (!get(in, kind) || kind > static_cast<std::uint8_t>(Error::Kind::Cancelled) || in.empty()) return garbled;
+    return Error{static_cast<Error::Kind>(kind), one_line(in)};
+  }
+  std::uint64_t nv = 0, nt = 0;
+  if (ok != 1 || !get(in, nv) || !get(in, nt)) return garbled;
+  if (nv > max_vertices || nt > in.size() / 12 || in.size() != 12 * (nv + nt)) return garbled;
+  TriangleMesh m;
+  m.vertices.resize(nv);
+  m.triangles.resize(nt);
+  for (Vec3f& v : m.vertices) get(in, v.x()), get(in, v.y()), get(in, v.z());
+  for (auto& t : m.triangles)
+    for (Index& i : t)
+      if (get(in, i), i >= nv) return garbled;
+  return m;
+}
+
+/// Assimp's part, in this process or (options.isolate) in a child. `read(importer)` runs ReadFile or
+/// ReadFileFromMemory.
+template <class Read>
+Result<TriangleMesh> assimp_triangles(const fs::path& path, const LoadOptions& options, MeshLoadStats& stats,
+                                      Read&& read) {
+  const auto here = [&](MeshLoadStats& s) -> Result<TriangleMesh> {
+    Assimp::Importer importer;
+    configure(importer);
+    return import_triangles(path, importer, read(importer), options.max_vertices, s);
+  };
+  if (!options.isolate) return here(stats);
+  auto answer = run_isolated(
+      [&] {
+        MeshLoadStats s;
+        try {
+          return encode(here(s), s);
+        } catch (const std::bad_alloc&) {
+          return encode(file_error(path, "out of memory while reading"), s);
+        } catch (const std::exception& e) {
+          return encode(file_error(path, one_line(e.what())), s);
+        } catch (...) {
+          return encode(file_error(path, "unknown error while reading"), s);
+        }
+      },
+      "Assimp's import", IsolateOptions{options.import_timeout_s});
+  if (!answer) return answer.error().kind == Error::Kind::Input ? file_error(path, answer.error().message) : answer.error();
+  return decode(path, *answer, options.max_vertices, stats);
+}
+
+/// Our part, after Assimp's: node transforms that overflowed, `options.transform`, degenerate triangles.
+Result<TriangleMesh> finish_import(const fs::path& path, TriangleMesh mesh, const LoadOptions& options,
+                                   MeshLoadStats& stats) {
   if (const auto k = first_non_finite(mesh.vertices); k != kNone)  // a huge node transform can overflow
     return file_error(path, fmt::format("vertex {} has a non-finite coordinate (NaN/Inf) after node transforms", k));
   if (!options.transform.is_identity()) {
@@ -485,10 +604,10 @@ Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& opt
   if (!ec && size == 0) return file_error(path, "file is empty");
   if (!ec) FF_CHECK(check_before_assimp(path, size));
 
-  Assimp::Importer importer;
-  configure(importer);
-  const aiScene* scene = importer.ReadFile(path.string(), 0);
-  return finish_import(path, importer, scene, options, stats);
+  FF_TRY(TriangleMesh mesh, assimp_triangles(path, options, stats, [&](Assimp::Importer& importer) {
+           return importer.ReadFile(path.string(), 0);
+         }));
+  return finish_import(path, std::move(mesh), options, stats);
 }
 
 Result<TriangleMesh> load_mesh_memory_impl(std::span<const std::uint8_t> bytes, const fs::path& name,
@@ -499,12 +618,12 @@ Result<TriangleMesh> load_mesh_memory_impl(std::span<const std::uint8_t> bytes, 
   FF_CHECK(check_before_assimp(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size(),
                                [&] { return all; }));
 
-  Assimp::Importer importer;
-  configure(importer);
   std::string hint = name.extension().string();  // Assimp picks the importer by it: "obj", "ply" ...
   if (!hint.empty()) hint.erase(0, 1);
-  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), 0, hint.c_str());
-  return finish_import(name, importer, scene, options, stats);
+  FF_TRY(TriangleMesh mesh, assimp_triangles(name, options, stats, [&](Assimp::Importer& importer) {
+           return importer.ReadFileFromMemory(bytes.data(), bytes.size(), 0, hint.c_str());
+         }));
+  return finish_import(name, std::move(mesh), options, stats);
 }
 
 /// `import()`, keeping the no-throw promise: Assimp catches its own import errors; this catches allocation failures

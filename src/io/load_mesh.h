@@ -38,6 +38,11 @@ struct MeshTransform {
 struct LoadOptions {
   MeshTransform transform;                    ///< applied after import
   std::size_t max_vertices = kMaxMeshVertices;  ///< refuse larger meshes (after welding), [1, 2^32 − 2]
+  /// Run Assimp in a child process (io/isolate.h), so that a crash, heap corruption or hang inside Assimp on a
+  /// malformed file becomes an Input error naming the file instead of taking the program down. Off only to debug
+  /// Assimp itself in one process.
+  bool isolate = true;
+  double import_timeout_s = 600.0;  ///< an isolated import still running after this long is stopped, (0, 86400]
 };
 
 /// Statistics of what import did (logged by the app).

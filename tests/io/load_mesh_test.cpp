@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -490,6 +491,21 @@ TEST(LoadMesh, HeadersDeclaringMoreElementsThanTheFileHoldsAreRefusedBeforeAssim
   expect_error(load_mesh(dir / "ascii.ply"), dir / "ascii.ply", "header declares 300000000 'vertex' elements");
   expect_error(load_mesh(dir / "binary.ply"), dir / "binary.ply", "header declares 300000000 'vertex' elements");
   expect_error(load_mesh(dir / "huge.off"), dir / "huge.off", "header declares 99999999999 faces");
+
+  // Counts as Assimp reads them: after a UTF-8 byte order mark, glued to the keyword, wrapped to 32 bits (found by
+  // fuzz_mesh: each made Assimp allocate tens of GB).
+  write_text(dir / "bom.off", "\xEF\xBB\xBFOFF\n6666666666 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  write_text(dir / "glued.off", "OFF7777777777 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  write_text(dir / "wrapped.off", "OFF\n3 4294967297000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error(load_mesh(dir / "bom.off"), dir / "bom.off", "header declares 6666666666 vertices");
+  expect_error(load_mesh(dir / "glued.off"), dir / "glued.off", "header declares 3482810481 vertices");
+  expect_error(load_mesh(dir / "wrapped.off"), dir / "wrapped.off", "header declares");
+
+  // end_header followed by a vertical tab is not the end of the header for Assimp, which then reads for ever.
+  write_text(dir / "vtab.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\v"
+                               "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error(load_mesh(dir / "vtab.ply"), dir / "vtab.ply", "PLY header has no end_header line");
 }
 
 TEST(LoadMesh, EveryFileOfAssimpsInvalidCorpusGivesAOneLineError) {
@@ -536,13 +552,68 @@ TEST(LoadMesh, FromMemoryAsFromTheFile) {
     const auto b = load_mesh_from_memory(bytes, file, {}, &mem_stats);
     ASSERT_EQ(a.has_value(), b.has_value()) << (a ? b.error().message : a.error().message);
     if (!a) {
-      EXPECT_EQ(a.error().message, b.error().message);
+      // Assimp's write past its array (AssimpsHeapOverflowOnAMalformedObjStaysInTheChildProcess) aborts the child or
+      // not depending on the heap's layout, which differs between reading a file and reading memory.
+      if (file.filename() != "obj_lines_overflow.obj") {
+        EXPECT_EQ(a.error().message, b.error().message);
+      }
       continue;
     }
     EXPECT_EQ(a->vertices, b->vertices);
     EXPECT_EQ(a->triangles, b->triangles);
     EXPECT_EQ(fs_stats.dropped_degenerate, mem_stats.dropped_degenerate);
   }
+}
+
+// Assimp 5.2.5's OBJ importer writes one vertex past its array for this file (two one-vertex `l` lines shift its
+// count, ObjFileImporter::createVertexArray; fixed upstream in 2023), then refuses it: in this process that write
+// corrupts the heap, which aborts at some later free. Isolated, it stays in the child: the error is one line naming
+// the file, however often it is read, and this process's heap is untouched.
+TEST(LoadMesh, AssimpsHeapOverflowOnAMalformedObjStaysInTheChildProcess) {
+  const fs::path file = test::data_dir() / "obj_lines_overflow.obj";
+  for (int k = 0; k < 20; ++k) {
+    auto r = load_mesh(file);
+    expect_error(r, file, "");
+    if (k == 0) std::printf("%s\n", r.error().message.c_str());
+    std::vector<std::vector<float>> churn;  // allocations of every size class around the overflowed one
+    for (std::size_t n = 1; n < 64; ++n) churn.emplace_back(n, 1.0f);
+  }
+}
+
+// The same meshes, statistics and errors whether Assimp runs in a child or here (isolate = false).
+TEST(LoadMesh, IsolatedAndInProcessImportsAgree) {
+  ASSERT_TRUE(models_installed());
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(test::data_dir()))
+    if (e.path().filename() != "obj_lines_overflow.obj") files.push_back(e.path());  // not in this process
+  for (const char* f : {"OBJ/spider.obj", "PLY/Wuson.ply", "STL/Spider_binary.stl", "FBX/spider.fbx",
+                        "Collada/duck.dae", "glTF2/BoxTextured-glTF/BoxTextured.gltf", "invalid/malformed.obj",
+                        "invalid/OutOfMemory.off", "invalid/emptyIrrMesh.xml"})
+    files.push_back(kModels / f);
+  std::sort(files.begin(), files.end());
+  LoadOptions here;
+  here.isolate = false;
+  for (const fs::path& file : files) {
+    SCOPED_TRACE(file.string());
+    MeshLoadStats sa, sb;
+    const auto a = load_mesh(file, {}, &sa);
+    const auto b = load_mesh(file, here, &sb);
+    ASSERT_EQ(a.has_value(), b.has_value()) << (a ? b.error().message : a.error().message);
+    if (!a) {
+      EXPECT_EQ(a.error().message, b.error().message);
+      EXPECT_EQ(a.error().kind, b.error().kind);
+      continue;
+    }
+    EXPECT_EQ(a->vertices, b->vertices);
+    EXPECT_EQ(a->triangles, b->triangles);
+    EXPECT_EQ(sa.source_meshes, sb.source_meshes);
+    EXPECT_EQ(sa.dropped_non_triangles, sb.dropped_non_triangles);
+    EXPECT_EQ(sa.dropped_degenerate, sb.dropped_degenerate);
+  }
+  LoadOptions bad;
+  bad.import_timeout_s = 0.0;
+  expect_error(load_mesh(test::data_dir() / "tetra.obj", bad), test::data_dir() / "tetra.obj", "import_timeout_s",
+               Error::Kind::Param);
 }
 
 TEST(LoadMesh, AssimpPrintsNothing) {
