@@ -479,68 +479,56 @@ Result<TriangleMesh> import_triangles(const fs::path& path, Assimp::Importer& im
 
 // ---- the import in a child process (io/isolate.h): its answer as bytes ----
 //
-// The statistics (source meshes, dropped non-triangles: two uint64), then one byte, 1 for a mesh, 0 for an error.
-// An error: its kind (one byte) and message. A mesh: vertex count nv and triangle count nt (two uint64), then
-// nv × 3 floats and nt × 3 uint32 indices.
-
-template <class T>
-void put(std::string& out, const T& v) {
-  out.append(reinterpret_cast<const char*>(&v), sizeof v);
-}
-
-template <class T>
-bool get(std::string_view& in, T& v) {
-  if (in.size() < sizeof v) return false;
-  std::memcpy(&v, in.data(), sizeof v);
-  in.remove_prefix(sizeof v);
-  return true;
-}
+// The statistics (source meshes, dropped non-triangles), then one byte, 1 for a mesh, 0 for an error. An error: its
+// kind (one byte) and message. A mesh: its vertices (x, y, z floats) and its triangles (three uint32 indices).
 
 std::string encode(const Result<TriangleMesh>& r, const MeshLoadStats& stats) {
-  std::string out;
-  put(out, std::uint64_t{stats.source_meshes});
-  put(out, std::uint64_t{stats.dropped_non_triangles});  // counted on the way to an error too
+  AnswerWriter out;
+  out.put(std::uint64_t{stats.source_meshes});
+  out.put(std::uint64_t{stats.dropped_non_triangles});  // counted on the way to an error too
   if (!r) {
-    put(out, std::uint8_t{0});
-    put(out, static_cast<std::uint8_t>(r.error().kind));
-    out += r.error().message;
-    return out;
+    out.put(std::uint8_t{0});
+    out.put(static_cast<std::uint8_t>(r.error().kind));
+    out.put_string(r.error().message);
+    return out.take();
   }
   const TriangleMesh& m = r.value();
-  put(out, std::uint8_t{1});
-  put(out, std::uint64_t{m.vertices.size()});
-  put(out, std::uint64_t{m.triangles.size()});
-  out.reserve(out.size() + 12 * (m.vertices.size() + m.triangles.size()));
-  for (const Vec3f& v : m.vertices) put(out, v.x()), put(out, v.y()), put(out, v.z());
-  for (const auto& t : m.triangles) put(out, t[0]), put(out, t[1]), put(out, t[2]);
-  return out;
+  out.put(std::uint8_t{1});
+  std::vector<std::array<float, 3>> xyz(m.vertices.size());
+  for (std::size_t v = 0; v < xyz.size(); ++v) xyz[v] = {m.vertices[v].x(), m.vertices[v].y(), m.vertices[v].z()};
+  out.put_vector(xyz);
+  out.put_vector(m.triangles);
+  return out.take();
 }
 
 /// The child's answer back into a mesh; every count is checked against the bytes that came, and every index
 /// against the vertices, since a child whose heap Assimp corrupted may still have answered.
-Result<TriangleMesh> decode(const fs::path& path, std::string_view in, std::size_t max_vertices,
+Result<TriangleMesh> decode(const fs::path& path, std::string_view bytes, std::size_t max_vertices,
                             MeshLoadStats& stats) {
   const Error garbled = file_error(path, "the import process sent a garbled answer");
+  AnswerReader in(bytes);
   std::uint64_t meshes = 0, other = 0;
   std::uint8_t ok = 0;
-  if (!get(in, meshes) || !get(in, other) || !get(in, ok)) return garbled;
+  if (!in.get(meshes) || !in.get(other) || !in.get(ok)) return garbled;
   stats.source_meshes = meshes;
   stats.dropped_non_triangles = other;
   if (ok == 0) {
     std::uint8_t kind = 0;
-    if (!get(in, kind) || kind > static_cast<std::uint8_t>(Error::Kind::Cancelled) || in.empty()) return garbled;
-    return Error{static_cast<Error::Kind>(kind), one_line(in)};
+    std::string message;
+    if (!in.get(kind) || !in.get_string(message) || !in.at_end() || message.empty() ||
+        kind > static_cast<std::uint8_t>(Error::Kind::Cancelled))
+      return garbled;
+    return Error{static_cast<Error::Kind>(kind), one_line(message)};
   }
-  std::uint64_t nv = 0, nt = 0;
-  if (ok != 1 || !get(in, nv) || !get(in, nt)) return garbled;
-  if (nv > max_vertices || nt > in.size() / 12 || in.size() != 12 * (nv + nt)) return garbled;
+  std::vector<std::array<float, 3>> xyz;
   TriangleMesh m;
-  m.vertices.resize(nv);
-  m.triangles.resize(nt);
-  for (Vec3f& v : m.vertices) get(in, v.x()), get(in, v.y()), get(in, v.z());
-  for (auto& t : m.triangles)
-    for (Index& i : t)
-      if (get(in, i), i >= nv) return garbled;
+  if (ok != 1 || !in.get_vector(xyz) || !in.get_vector(m.triangles) || !in.at_end() || xyz.size() > max_vertices)
+    return garbled;
+  m.vertices.resize(xyz.size());
+  for (std::size_t v = 0; v < xyz.size(); ++v) m.vertices[v] = Vec3f(xyz[v][0], xyz[v][1], xyz[v][2]);
+  for (const auto& t : m.triangles)
+    for (const Index i : t)
+      if (i >= m.vertices.size()) return garbled;
   return m;
 }
 

@@ -4,10 +4,12 @@
 // throws away: bone weights and animations, and the meshes separate with their nodes (no PreTransformVertices,
 // which drops bones). Each raw vertex's bind position is computed as load_mesh computes it (its mesh node's
 // global matrix, then T), and every vertex of load_mesh's welded mesh takes the weights of the raw vertex
-// nearest to it (distance ~0: the weld is by identical position).
+// nearest to it (distance ~0: the weld is by identical position). As in load_mesh, Assimp runs in a child process
+// (io/isolate.h) and the skin comes back as bytes.
 #include "io/skin.h"
 
 #include "core/point_tree.h"
+#include "io/isolate.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/anim.h>
@@ -17,7 +19,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <map>
 #include <new>
@@ -231,9 +235,8 @@ Result<std::optional<Skin>> load_skin_impl(const fs::path& path, const TriangleM
   return std::optional<Skin>(std::move(skin));
 }
 
-}  // namespace
-
-Result<std::optional<Skin>> load_skin(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform) {
+/// load_skin_impl with the no-throw promise kept.
+Result<std::optional<Skin>> load_skin_here(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform) {
   try {
     return load_skin_impl(path, mesh, transform);
   } catch (const std::bad_alloc&) {
@@ -241,6 +244,150 @@ Result<std::optional<Skin>> load_skin(const fs::path& path, const TriangleMesh& 
   } catch (const std::exception& e) {
     return skin_error(path, e.what());
   }
+}
+
+// ---- the skin read in a child process (io/isolate.h), as bytes ----
+//
+// One byte: 0 an error (kind, message), 2 no bones, 1 a skin: nodes, joint nodes, inverse binds, per-vertex joints and
+// weights, clips, warnings, each list with its count first.
+
+void put_vec3(AnswerWriter& w, const Vec3f& v) { w.put(std::array<float, 3>{v.x(), v.y(), v.z()}); }
+void put_quat(AnswerWriter& w, const Quatf& q) { w.put(std::array<float, 4>{q.w(), q.x(), q.y(), q.z()}); }
+void put_mat(AnswerWriter& w, const Mat4f& m) {
+  std::array<float, 16> a{};
+  std::copy(m.data(), m.data() + 16, a.begin());
+  w.put(a);
+}
+bool get_vec3(AnswerReader& r, Vec3f& v) {
+  std::array<float, 3> a{};
+  return r.get(a) && (v = Vec3f(a[0], a[1], a[2]), true);
+}
+bool get_quat(AnswerReader& r, Quatf& q) {
+  std::array<float, 4> a{};
+  return r.get(a) && (q = Quatf(a[0], a[1], a[2], a[3]), true);
+}
+bool get_mat(AnswerReader& r, Mat4f& m) {
+  std::array<float, 16> a{};
+  return r.get(a) && (std::copy(a.begin(), a.end(), m.data()), true);
+}
+template <class T, class Put>
+void put_list(AnswerWriter& w, const std::vector<T>& v, Put&& put) {
+  w.put(std::uint64_t{v.size()});
+  for (const T& x : v) put(w, x);
+}
+template <class T, class Get>
+bool get_list(AnswerReader& r, std::vector<T>& v, std::size_t min_bytes, Get&& get) {
+  std::uint64_t n = 0;
+  if (!r.get_count(n, min_bytes)) return false;
+  v.resize(n);
+  for (T& x : v)
+    if (!get(r, x)) return false;
+  return true;
+}
+
+std::string encode_skin(const Result<std::optional<Skin>>& r) {
+  AnswerWriter w;
+  if (!r) {
+    w.put(std::uint8_t{0});
+    w.put(static_cast<std::uint8_t>(r.error().kind));
+    w.put_string(r.error().message);
+    return w.take();
+  }
+  if (!r.value()) {
+    w.put(std::uint8_t{2});
+    return w.take();
+  }
+  const Skin& s = *r.value();
+  w.put(std::uint8_t{1});
+  put_list(w, s.nodes, [](AnswerWriter& o, const SkinNode& n) {
+    o.put_string(n.name);
+    o.put(std::int32_t{n.parent});
+    put_vec3(o, n.translation), put_quat(o, n.rotation), put_vec3(o, n.scale);
+  });
+  w.put_vector(s.joint_nodes);
+  put_list(w, s.inverse_bind, put_mat);
+  w.put_vector(s.joints);
+  w.put_vector(s.weights);
+  put_list(w, s.clips, [](AnswerWriter& o, const AnimationClip& c) {
+    o.put_string(c.name);
+    o.put(c.duration);
+    put_list(o, c.channels, [](AnswerWriter& p, const NodeChannel& ch) {
+      p.put(std::int32_t{ch.node});
+      p.put_vector(ch.translation_times), p.put_vector(ch.rotation_times), p.put_vector(ch.scale_times);
+      put_list(p, ch.translations, put_vec3), put_list(p, ch.rotations, put_quat), put_list(p, ch.scales, put_vec3);
+    });
+  });
+  put_list(w, s.warnings, [](AnswerWriter& o, const std::string& x) { o.put_string(x); });
+  return w.take();
+}
+
+/// The child's answer back into a skin. Every count is checked against the bytes that came and every index against
+/// what it indexes (a parent before its child, joints' nodes, vertices' joints, channels' nodes), since a child whose
+/// heap Assimp corrupted may still have answered; the values themselves the child has checked.
+Result<std::optional<Skin>> decode_skin(const fs::path& path, std::string_view bytes, std::size_t n_vertices) {
+  const Error garbled = skin_error(path, "the import process sent a garbled answer for its skin");
+  AnswerReader r(bytes);
+  std::uint8_t tag = 0;
+  if (!r.get(tag)) return garbled;
+  if (tag == 0) {
+    std::uint8_t kind = 0;
+    std::string message;
+    if (!r.get(kind) || !r.get_string(message) || !r.at_end() || message.empty() ||
+        kind > static_cast<std::uint8_t>(Error::Kind::Cancelled))
+      return garbled;
+    return Error{static_cast<Error::Kind>(kind), message};
+  }
+  if (tag == 2) return r.at_end() ? Result<std::optional<Skin>>(std::optional<Skin>{}) : garbled;
+  if (tag != 1) return garbled;
+  Skin s;
+  get_list(r, s.nodes, 8 + 4 + 40, [](AnswerReader& in, SkinNode& n) {
+    std::int32_t parent = 0;
+    return in.get_string(n.name) && in.get(parent) && (n.parent = parent, true) && get_vec3(in, n.translation) &&
+           get_quat(in, n.rotation) && get_vec3(in, n.scale);
+  });
+  r.get_vector(s.joint_nodes);
+  get_list(r, s.inverse_bind, 64, get_mat);
+  r.get_vector(s.joints);
+  r.get_vector(s.weights);
+  get_list(r, s.clips, 8 + 8 + 8, [](AnswerReader& in, AnimationClip& c) {
+    return in.get_string(c.name) && in.get(c.duration) &&
+           get_list(in, c.channels, 4 + 6 * 8, [](AnswerReader& p, NodeChannel& ch) {
+             std::int32_t node = 0;
+             return p.get(node) && (ch.node = node, true) && p.get_vector(ch.translation_times) &&
+                    p.get_vector(ch.rotation_times) && p.get_vector(ch.scale_times) &&
+                    get_list(p, ch.translations, 12, get_vec3) && get_list(p, ch.rotations, 16, get_quat) &&
+                    get_list(p, ch.scales, 12, get_vec3);
+           });
+  });
+  get_list(r, s.warnings, 8, [](AnswerReader& in, std::string& x) { return in.get_string(x); });
+  if (!r.ok() || !r.at_end()) return garbled;
+
+  const auto n_nodes = static_cast<int>(s.nodes.size());
+  for (int i = 0; i < n_nodes; ++i)
+    if (s.nodes[i].parent < -1 || s.nodes[i].parent >= i) return garbled;
+  for (const int j : s.joint_nodes)
+    if (j < 0 || j >= n_nodes) return garbled;
+  if (s.inverse_bind.size() != s.joint_nodes.size() || s.joints.size() != n_vertices || s.weights.size() != n_vertices)
+    return garbled;
+  for (const auto& j : s.joints)
+    for (const std::uint16_t k : j)
+      if (k >= s.joint_nodes.size()) return garbled;
+  for (const auto& c : s.clips)
+    for (const auto& ch : c.channels)
+      if (ch.node < 0 || ch.node >= n_nodes || ch.translation_times.size() != ch.translations.size() ||
+          ch.rotation_times.size() != ch.rotations.size() || ch.scale_times.size() != ch.scales.size())
+        return garbled;
+  return std::optional<Skin>(std::move(s));
+}
+
+}  // namespace
+
+Result<std::optional<Skin>> load_skin(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform,
+                                      bool isolate) {
+  if (!isolate) return load_skin_here(path, mesh, transform);
+  auto answer = run_isolated([&] { return encode_skin(load_skin_here(path, mesh, transform)); }, "Assimp's import");
+  if (!answer) return answer.error().kind == Error::Kind::Input ? skin_error(path, answer.error().message) : answer.error();
+  return decode_skin(path, *answer, mesh.vertices.size());
 }
 
 }  // namespace ff::io

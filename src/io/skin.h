@@ -104,7 +104,9 @@ inline Vec3f skin_point(const std::vector<Mat4f>& K, const std::array<std::uint1
 /// several take the first's). Returns nullopt for a file without bones (a mesh without a skin behaves as today).
 /// Errors (one line naming the file): Input for a NaN or negative weight, a bone naming a node the file lacks,
 /// a non-finite matrix or key, more than 65535 joints; an unreadable file as load_mesh says it.
+/// `isolate`: read in a child process (io/isolate.h), as load_mesh does by default, so that Assimp crashing on the
+/// file is an Input error naming it; false reads it in this process.
 Result<std::optional<Skin>> load_skin(const std::filesystem::path& path, const TriangleMesh& mesh,
-                                      const MeshTransform& transform);
+                                      const MeshTransform& transform, bool isolate = true);
 
 }  // namespace ff::io
