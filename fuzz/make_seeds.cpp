@@ -3,6 +3,7 @@
 // sends them. The text seeds (scenes, messages, requests, meshes) are plain files in fuzz/corpus/. Built by the fuzz
 // preset; run by hand when a format changes:  build/fuzz/fuzz/fuzz_make_seeds fuzz/corpus
 #include "io/atomic_file.h"
+#include "io/load_mesh.h"
 #include "io/write_ply.h"
 #include "metrics/report.h"
 #include "server/frame_codec.h"
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace {
@@ -86,5 +88,24 @@ int main(int argc, char** argv) {
   tetra.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   ok &= write(dir / "surface" / "tetra.bin", server::encode_surface({3, 0.05, 2.0f}, tetra));
   ok &= write(dir / "surface" / "empty.bin", server::encode_surface({0, 0.0, 0.0f}, io::TriangleMesh{}));
+
+  // Import processes' answers (fuzz_mesh_checks: first byte 0x10 | transform << 2 | format): the tetrahedron; with a
+  // degenerate triangle and a vertex no triangle uses; mirrored; an error. (Its mesh-file seeds are fuzz_mesh's.)
+  const auto answer = [&](const char* file, std::uint8_t first, const Result<io::TriangleMesh>& r,
+                          const io::MeshLoadStats& stats) {
+    std::string bytes = io::import_answer(r, stats);
+    bytes.insert(bytes.begin(), static_cast<char>(first));
+    return write(dir / "mesh_checks" / file, {reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()});
+  };
+  io::MeshLoadStats stats;
+  stats.source_meshes = 1;
+  ok &= answer("answer_tetra.bin", 0x10, tetra, stats);
+  io::TriangleMesh untidy = tetra;
+  untidy.vertices.push_back({5, 5, 5});
+  untidy.triangles.push_back({0, 1, 1});
+  stats.dropped_non_triangles = 2;
+  ok &= answer("answer_untidy.bin", 0x10, untidy, stats);
+  ok &= answer("answer_tetra_mirrored.bin", 0x10 | (1 << 2), tetra, stats);
+  ok &= answer("answer_error.bin", 0x10, Error{Error::Kind::Input, "mesh.obj: contains no meshes"}, stats);
   return ok ? 0 : 1;
 }

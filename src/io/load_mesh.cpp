@@ -515,10 +515,12 @@ Result<TriangleMesh> decode(const fs::path& path, std::string_view bytes, std::s
   if (ok == 0) {
     std::uint8_t kind = 0;
     std::string message;
-    if (!in.get(kind) || !in.get_string(message) || !in.at_end() || message.empty() ||
-        kind > static_cast<std::uint8_t>(Error::Kind::Cancelled))
+    // The child's errors are all about the file (file_error): any other kind is a garbled answer, not an exit 1.
+    if (!in.get(kind) || !in.get_string(message) || !in.at_end() ||
+        kind != static_cast<std::uint8_t>(Error::Kind::Input))
       return garbled;
-    return Error{static_cast<Error::Kind>(kind), one_line(message)};
+    message = one_line(message);
+    return message.empty() ? garbled : input_error(std::move(message));
   }
   std::vector<std::array<float, 3>> xyz;
   TriangleMesh m;
@@ -598,13 +600,17 @@ Result<TriangleMesh> load_mesh_impl(const fs::path& path, const LoadOptions& opt
   return finish_import(path, std::move(mesh), options, stats);
 }
 
+Status check_mesh_bytes_impl(std::span<const std::uint8_t> bytes, const fs::path& name) {
+  if (bytes.empty()) return file_error(name, "file is empty");
+  const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  return check_before_assimp(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size(),
+                             [&] { return all; });
+}
+
 Result<TriangleMesh> load_mesh_memory_impl(std::span<const std::uint8_t> bytes, const fs::path& name,
                                            const LoadOptions& options, MeshLoadStats& stats) {
   FF_CHECK(check_options(name, options));
-  if (bytes.empty()) return file_error(name, "file is empty");
-  const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-  FF_CHECK(check_before_assimp(name, all.substr(0, static_cast<std::size_t>(kHeaderBytes)), bytes.size(),
-                               [&] { return all; }));
+  FF_CHECK(check_mesh_bytes_impl(bytes, name));
 
   std::string hint = name.extension().string();  // Assimp picks the importer by it: "obj", "ply" ...
   if (!hint.empty()) hint.erase(0, 1);
@@ -664,6 +670,28 @@ Result<TriangleMesh> load_mesh(const fs::path& path, const LoadOptions& options,
 Result<TriangleMesh> load_mesh_from_memory(std::span<const std::uint8_t> bytes, const fs::path& name,
                                            const LoadOptions& options, MeshLoadStats* stats) {
   return guarded(name, stats, [&](MeshLoadStats& s) { return load_mesh_memory_impl(bytes, name, options, s); });
+}
+
+Status check_mesh_bytes(std::span<const std::uint8_t> bytes, const fs::path& name) {
+  try {
+    return check_mesh_bytes_impl(bytes, name);
+  } catch (const std::bad_alloc&) {
+    return file_error(name, "out of memory while reading");
+  }
+}
+
+Result<TriangleMesh> mesh_from_import_answer(std::span<const std::uint8_t> answer, const fs::path& name,
+                                             const LoadOptions& options, MeshLoadStats* stats) {
+  return guarded(name, stats, [&](MeshLoadStats& s) -> Result<TriangleMesh> {
+    FF_CHECK(check_options(name, options));
+    const std::string_view bytes(reinterpret_cast<const char*>(answer.data()), answer.size());
+    FF_TRY(TriangleMesh mesh, decode(name, bytes, options.max_vertices, s));
+    return finish_import(name, std::move(mesh), options, s);
+  });
+}
+
+std::string import_answer(const Result<TriangleMesh>& result, const MeshLoadStats& stats) {
+  return encode(result, stats);
 }
 
 void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {

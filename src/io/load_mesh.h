@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string>
 
 namespace ff::io {
 
@@ -65,6 +66,19 @@ Result<TriangleMesh> load_mesh(const std::filesystem::path& path, const LoadOpti
 /// messages, and its extension tells Assimp the format ("mesh.obj"); the same checks, the same errors.
 Result<TriangleMesh> load_mesh_from_memory(std::span<const std::uint8_t> bytes, const std::filesystem::path& name,
                                            const LoadOptions& options = {}, MeshLoadStats* stats = nullptr);
+
+// ---- load_mesh's own parts, one by one (the fuzz targets reach them without Assimp: fuzz/fuzz_mesh_checks.cpp) ----
+
+/// The checks made on a mesh file's bytes before Assimp sees them (declared counts against the file's size, an OFF
+/// file's lines, the end of a PLY header): ok, or the Input error load_mesh_from_memory() gives without importing.
+Status check_mesh_bytes(std::span<const std::uint8_t> bytes, const std::filesystem::path& name);
+/// What load_mesh() makes of the answer of its import process (io/isolate.h), whatever that process sent: every
+/// count checked against the bytes, every index against the vertices, then node-transform overflow,
+/// `options.transform` and degenerate triangles as for a file. A garbled answer is an Input error naming `name`.
+Result<TriangleMesh> mesh_from_import_answer(std::span<const std::uint8_t> answer, const std::filesystem::path& name,
+                                             const LoadOptions& options = {}, MeshLoadStats* stats = nullptr);
+/// The answer an import process sends for `result` (a mesh, or the error it ended with) and `stats`.
+std::string import_answer(const Result<TriangleMesh>& result, const MeshLoadStats& stats);
 
 /// Applies `t` to every vertex in place; a mirroring `t` (MeshTransform::mirrors) also reverses every triangle's
 /// winding, so outward stays outward.

@@ -332,10 +332,12 @@ Result<std::optional<Skin>> decode_skin(const fs::path& path, std::string_view b
   if (tag == 0) {
     std::uint8_t kind = 0;
     std::string message;
+    // The child's errors are all about the file (skin_error), one line each: anything else is a garbled answer.
+    const auto control = [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; };
     if (!r.get(kind) || !r.get_string(message) || !r.at_end() || message.empty() ||
-        kind > static_cast<std::uint8_t>(Error::Kind::Cancelled))
+        kind != static_cast<std::uint8_t>(Error::Kind::Input) || std::any_of(message.begin(), message.end(), control))
       return garbled;
-    return Error{static_cast<Error::Kind>(kind), message};
+    return input_error(message);
   }
   if (tag == 2) return r.at_end() ? Result<std::optional<Skin>>(std::optional<Skin>{}) : garbled;
   if (tag != 1) return garbled;

@@ -616,6 +616,49 @@ TEST(LoadMesh, IsolatedAndInProcessImportsAgree) {
                Error::Kind::Param);
 }
 
+// What the parent makes of its import process's answer (fuzz/fuzz_mesh_checks.cpp fuzzes it): a mesh comes back as
+// sent, transformed and cleaned as a file's; a cut, padded or lying answer, or an error of a kind that is not about
+// the file (a child whose heap Assimp corrupted may still answer), is an Input error naming the file.
+TEST(LoadMesh, AnImportAnswerIsCheckedAndFinishedAsAFile) {
+  TriangleMesh tetra;
+  tetra.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {7, 7, 7}};  // the last one unused
+  tetra.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {1, 2, 2}};  // the last one degenerate
+  MeshLoadStats sent;
+  sent.source_meshes = 2;
+  sent.dropped_non_triangles = 3;
+  const std::string answer = import_answer(tetra, sent);
+  const auto bytes = [](const std::string& s) {
+    return std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
+  };
+  MeshLoadStats got;
+  LoadOptions mirror;
+  mirror.transform.scale = {-1, 1, 1};
+  auto m = mesh_from_import_answer(bytes(answer), "m.obj", mirror, &got);
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_EQ(m->vertices.size(), 4u);
+  EXPECT_EQ(m->triangles.size(), 4u);
+  EXPECT_EQ(m->vertices[1], Vec3f(-1, 0, 0));
+  EXPECT_NEAR(signed_volume(*m), 1.0 / 6.0, 1e-7);  // mirrored, still outward
+  EXPECT_EQ(got.source_meshes, 2u);
+  EXPECT_EQ(got.dropped_non_triangles, 3u);
+  EXPECT_EQ(got.dropped_degenerate, 1u);
+
+  for (std::size_t cut : {std::size_t{0}, std::size_t{1}, std::size_t{17}, answer.size() - 1})
+    expect_error(mesh_from_import_answer(bytes(answer.substr(0, cut)), "m.obj"), "m.obj", "garbled");
+  expect_error(mesh_from_import_answer(bytes(answer + "x"), "m.obj"), "m.obj", "garbled");
+  TriangleMesh lying = tetra;
+  lying.triangles[0][1] = 5;  // one past the vertices
+  expect_error(mesh_from_import_answer(bytes(import_answer(lying, sent)), "m.obj"), "m.obj", "garbled");
+
+  const auto refused = mesh_from_import_answer(bytes(import_answer(input_error("m.obj: bad\nline"), sent)), "m.obj");
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().kind, Error::Kind::Input);
+  EXPECT_EQ(refused.error().message, "m.obj: bad line");
+  for (const Error& e : {numerical_error("m.obj: x"), io_error("m.obj: x"), Error{Error::Kind::Cancelled, "x"},
+                         input_error("\n\t")})
+    expect_error(mesh_from_import_answer(bytes(import_answer(e, sent)), "m.obj"), "m.obj", "garbled");
+}
+
 TEST(LoadMesh, AssimpPrintsNothing) {
   ASSERT_TRUE(models_installed());
   testing::internal::CaptureStdout();
