@@ -190,6 +190,16 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     }
   }
   build_bonds(p);
+  // The bonds, fills and nearest samples are decided at the start of the sub-step (fluid at x, samples at their
+  // pose then); the corrections act on x*, where the fluid is at its end, so they see the samples where they are at
+  // its end too: x_c + Δt u_c, the pose at t + Δt. Otherwise a moving target's samples trail the fluid they carry by
+  // u_c Δt, and its density constraint pulls that fluid back.
+  if (samples_.moving())
+    parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Vec3f end = samples_.position[i] + view.dt * samples_.velocity[i];
+      sample_xw_[i].x = end.x(), sample_xw_[i].y = end.y(), sample_xw_[i].z = end.z();
+    });
 }
 
 // Bonds B(j), CSR over the fluid, as the transpose of the sample → fluid pairs with |x_ci − x_j| ≤ H_c*,i: a
@@ -437,8 +447,8 @@ void AdaptiveController::sample_lambdas(sim::ParticleSet& p) {
     sample_xw_[i].w = 0.0f;
     const std::uint8_t t = samples_.target[i];
     if (!active(t, time_)) return;
-    const Vec3f xi = samples_.position[i];
-    const __m128 px = broadcast(xi.x()), py = broadcast(xi.y()), pz = broadcast(xi.z());
+    const PackedSample xi = sample_xw_[i];  // at the end of the sub-step, as x* (begin_step)
+    const __m128 px = broadcast(xi.x), py = broadcast(xi.y), pz = broadcast(xi.z);
     const auto range = cf_.of(i);
     // Density and gradient sums in one pass over the pairs: once the fluid has arrived nearly every sample is
     // slightly under-filled (the control holds the fluid against the PBF pressure), so the gradient sum is needed
@@ -499,11 +509,12 @@ void AdaptiveController::scatter_correction(sim::ParticleSet& p, const Correctio
   const Vec3f* x = p.position.data();  // bonds were decided at the start of the sub-step
   for (Index i : active_) {
     const std::uint8_t t = samples_.target[i];
-    const Vec3f xi = samples_.position[i];
+    const Vec3f xi = samples_.position[i];  // the bond was decided at the start
+    const Vec3f xe(sample_xw_[i].x, sample_xw_[i].y, sample_xw_[i].z);  // the correction acts at the end (begin_step)
     const float coef = strength_[t] * samples_.phi[i] * lambda_[i] * mp / samples_.rho_c[i] * kg, hs2 = bond_radius2_[i];
     for (Index j : cf_.of(i)) {
       if (tf[j] != t || (xi - x[j]).squaredNorm() > hs2) continue;
-      const Vec3f r = xi - xs[j];
+      const Vec3f r = xe - xs[j];
       const float r2 = r.squaredNorm();
       if (r2 >= spiky_.h2 || r2 == 0.0f) continue;
       const float len = std::sqrt(r2), q = spiky_.h - len;

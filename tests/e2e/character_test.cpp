@@ -106,9 +106,11 @@ INSTANTIATE_TEST_SUITE_P(
         CharacterCase{"anim_test",
                       R"({"mesh": "/usr/share/assimp/models/X/anim_test.x", "scale": 0.1, "animation": {"clip": "0"}})", 360,
                       3.0},
+        // huesitos' last stragglers are gathered by 5.2 s (first frame with 98 % inside; 4.4–4.6 s before the
+        // corrections saw the samples at the end of the sub-step, bench/RESULTS.md "fourth part"): from 6 s.
         CharacterCase{"huesitos",
                       R"({"mesh": "/usr/share/assimp/models/FBX/huesitos.fbx", "scale": 0.01, "animation": {"clip": "0"}})",
-                      420, 5.0},
+                      420, 6.0},
         // An open sheet (10 vertices, 2 joints, a 5.5 s bend): its fluid is one particle per surface sample, poured
         // from above onto the strip's top edge, so it forms later; from 10 s the figures cover a whole play of the clip.
         CharacterCase{"simple_skin",
