@@ -1,13 +1,17 @@
 #include "support/test_support.h"
 
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <sys/wait.h>
 #include <fstream>
 #include <map>
+#include <mutex>
+#include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace ff::test {
 namespace fs = std::filesystem;
@@ -22,12 +26,38 @@ fs::path binary() {
   return s ? fs::path(s) : fs::path(FF_BINARY_PATH);
 }
 
+namespace {
+// The folders temp_dir made in this process, removed when it exits with every test passed; a failed program keeps
+// them to look at (so does FF_KEEP_TEST_DIRS=1). A forked child that exits (a death test, a test's own fork) leaves
+// its parent's folders alone.
+class TempDirs {
+ public:
+  void add(const fs::path& p) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    dirs_.push_back(p);
+  }
+  ~TempDirs() {
+    if (::getpid() != owner_ || std::getenv("FF_KEEP_TEST_DIRS") || !::testing::UnitTest::GetInstance()->Passed())
+      return;
+    std::error_code ec;
+    for (const fs::path& p : dirs_) fs::remove_all(p, ec);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<fs::path> dirs_;
+  const pid_t owner_ = ::getpid();
+};
+}  // namespace
+
 fs::path temp_dir(const std::string& tag) {
   static std::atomic<int> counter{0};
+  static TempDirs made;
   const fs::path p = fs::temp_directory_path() /
                      ("fluidform-test-" + tag + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
   fs::remove_all(p);
   fs::create_directories(p);
+  made.add(p);
   return p;
 }
 

@@ -15,7 +15,8 @@ std::filesystem::path source_dir();
 std::filesystem::path data_dir();
 /// The fluidform binary (FF_BINARY, set by CTest).
 std::filesystem::path binary();
-/// A fresh empty folder under the system temp dir, unique per call.
+/// A fresh empty folder under the system temp dir, unique per call; removed when the test program exits with every
+/// test passed (kept after a failure, or with FF_KEEP_TEST_DIRS=1).
 std::filesystem::path temp_dir(const std::string& tag);
 
 /// Runs a shell command; its exit code (−1 when it did not exit normally) and its output, stdout and stderr.
