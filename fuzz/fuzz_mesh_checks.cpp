@@ -8,48 +8,28 @@
 //   still answer), given to what load_mesh does with it; bits 2-3 pick the transform. A mesh that comes back has
 //   triangles, every index in range, no repeated index in a triangle, finite vertices, no vertex that no triangle
 //   uses, and is a fixed point: sent again as an answer, it comes back the same.
-#include "fuzz_target.h"
-#include "io/load_mesh.h"
+#include "mesh_fuzz.h"
 
-#include <array>
 #include <cstring>
 #include <string>
-#include <vector>
 
 FF_FUZZ_TARGET(mesh_checks) {
   using namespace ff;
   if (size == 0) return 0;
-  static constexpr std::array<const char*, 4> kNames{"mesh.obj", "mesh.ply", "mesh.stl", "mesh.off"};
   const std::span<const std::uint8_t> rest(data + 1, size - 1);
-  const char* name = kNames[data[0] & 3];
+  const char* name = fuzz::mesh_name(data[0]);
   if ((data[0] & 0x10) == 0) {
     if (auto s = io::check_mesh_bytes(rest, name); !s.ok()) fuzz::check_refusal(s.error());
     return 0;
   }
 
-  io::LoadOptions options;
-  switch ((data[0] >> 2) & 3) {
-    case 1: options.transform.scale = {-2.0f, 1.0f, 1.0f}; break;  // a mirror: the windings are reversed
-    case 2: options.transform.rotate_deg = {30.0f, 45.0f, 60.0f}, options.transform.translate = {1e3f, 0, 0}; break;
-    case 3: options.transform.scale = {1e30f, 1e30f, 1e30f}; break;  // may overflow to Inf: refused
-    default: break;
-  }
   io::MeshLoadStats stats;
-  auto m = io::mesh_from_import_answer(rest, name, options, &stats);
+  auto m = io::mesh_from_import_answer(rest, name, fuzz::mesh_options(data[0]), &stats);
   if (!m) {
     fuzz::check_refusal(m.error());
     return 0;
   }
-  FF_FUZZ_CHECK(!m->triangles.empty() && !m->vertices.empty());
-  std::vector<bool> used(m->vertices.size(), false);
-  for (const auto& t : m->triangles) {
-    for (const Index i : t) {
-      FF_FUZZ_CHECK(i < m->vertices.size());
-      used[i] = true;
-    }
-    FF_FUZZ_CHECK(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
-  }
-  for (std::size_t i = 0; i < m->vertices.size(); ++i) FF_FUZZ_CHECK(used[i] && m->vertices[i].allFinite());
+  fuzz::check_loaded_mesh(*m);
 
   // Nothing is left to drop or to refuse in a mesh that came back: as an answer again, it comes back bit for bit.
   const std::string again = io::import_answer(*m, stats);
