@@ -359,11 +359,51 @@ Result<MeshField> MeshField::build(const io::TriangleMesh& mesh) {
     for (const Index v : tris[t]) f.bounds_.extend(mesh.vertices[v]);
   }
   f.encloses_volume_ = f.stats_.hole_area <= kMaxHoleFraction * f.area_ && f.volume_ > 1e-6 * std::pow(f.area_, 1.5);
-  f.build_bvh(std::move(geometry), std::move(source));
+  f.vertex_count_ = mesh.vertices.size();
+  f.build_bvh(std::move(geometry), std::move(source), std::move(tris));
   return f;
 }
 
-void MeshField::build_bvh(std::vector<Triangle> tris, std::vector<Index> source) {
+Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices) const {
+  if (vertices.size() != vertex_count_)
+    return input_error(fmt::format("moved mesh has {} vertices, its field was built with {}", vertices.size(), vertex_count_));
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (!vertices[v].allFinite()) return input_error(fmt::format("moved mesh: vertex {} is not finite", v));
+  MeshField f;
+  f.volume_ = volume_, f.encloses_volume_ = encloses_volume_, f.stats_ = stats_;
+  f.source_ = source_, f.bvh_index_ = bvh_index_, f.corners_ = corners_, f.vertex_count_ = vertex_count_;
+  f.nodes_ = nodes_;
+  f.tris_.resize(tris_.size());
+  f.normal_.resize(tris_.size());
+  for (std::size_t k = 0; k < tris_.size(); ++k) {
+    const auto& c = corners_[k];
+    Triangle& t = f.tris_[k];
+    t = {vertices[c[0]], vertices[c[1]], vertices[c[2]]};
+    f.normal_[k] = (t.b - t.a).cross(t.c - t.a).normalized();  // Eigen: a zero vector stays zero
+    f.area_ += 0.5 * (to_d(t.b) - to_d(t.a)).cross(to_d(t.c) - to_d(t.a)).norm();
+    f.bounds_.extend(t.a), f.bounds_.extend(t.b), f.bounds_.extend(t.c);
+  }
+  // Refit: children follow their parent in nodes_ (build_node allocates a pair after its parent), so a reverse
+  // sweep meets every child before its parent. range: each node's triangles, for the expansions.
+  std::vector<std::array<Index, 2>> range(nodes_.size());
+  for (std::size_t k = nodes_.size(); k-- > 0;) {
+    Node& n = f.nodes_[k];
+    Aabb box;
+    if (n.count > 0) {
+      for (Index t = n.first; t < n.first + n.count; ++t) box.extend(f.tris_[t].a), box.extend(f.tris_[t].b), box.extend(f.tris_[t].c);
+      range[k] = {n.first, n.first + n.count};
+    } else {
+      const Node &l = f.nodes_[n.first], &r = f.nodes_[n.first + 1];
+      box.extend(l.lo), box.extend(l.hi), box.extend(r.lo), box.extend(r.hi);
+      range[k] = {range[n.first][0], range[n.first + 1][1]};
+    }
+    n.lo = box.min, n.hi = box.max;
+  }
+  f.build_expansions(range);
+  return f;
+}
+
+void MeshField::build_bvh(std::vector<Triangle> tris, std::vector<Index> source, std::vector<std::array<Index, 3>> corners) {
   std::vector<Index> order(tris.size());
   std::iota(order.begin(), order.end(), Index{0});
   std::vector<std::array<Index, 2>> range;
@@ -375,11 +415,13 @@ void MeshField::build_bvh(std::vector<Triangle> tris, std::vector<Index> source)
   tris_.resize(tris.size());
   source_.resize(tris.size());
   normal_.resize(tris.size());
+  corners_.resize(tris.size());
   bvh_index_.assign(source.empty() ? 0 : std::size_t{source.back()} + 1, kInvalidIndex);
   for (std::size_t k = 0; k < order.size(); ++k) {
     const Triangle& t = tris[order[k]];
     tris_[k] = t;
     source_[k] = source[order[k]];
+    corners_[k] = corners[order[k]];
     bvh_index_[source_[k]] = static_cast<Index>(k);
     normal_[k] = (t.b - t.a).cross(t.c - t.a).normalized();
   }
@@ -495,7 +537,13 @@ void MeshField::build_expansions(const std::vector<std::array<Index, 2>>& range)
       centre += an.norm() * (a + b + c) / 3.0;
       n += an;
     }
-    centre /= area;
+    // A node whose triangles a move (moved()) collapsed has no area: its vertices' mean stands in for the centre.
+    if (area > 0.0) {
+      centre /= area;
+    } else {
+      for (Index t = begin; t < end; ++t) centre += (to_d(tris_[t].a) + to_d(tris_[t].b) + to_d(tris_[t].c)) / 3.0;
+      centre /= double(end - begin);
+    }
     Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
     Eigen::Matrix3d t3[3] = {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()};
     double r2 = 0.0;
@@ -683,7 +731,7 @@ void MeshField::signed_distance(std::span<const Vec3f> p, std::span<float> out) 
 std::size_t MeshField::bytes() const {
   return sizeof(*this) + nodes_.capacity() * sizeof(Node) + expansion_.capacity() * sizeof(Expansion) +
          tris_.capacity() * sizeof(Triangle) + normal_.capacity() * sizeof(Vec3f) + source_.capacity() * sizeof(Index) +
-         bvh_index_.capacity() * sizeof(Index);
+         bvh_index_.capacity() * sizeof(Index) + corners_.capacity() * sizeof(corners_[0]);
 }
 
 // ---- ray parity ----------------------------------------------------------------------------------------

@@ -197,6 +197,59 @@ TEST(FF_SUITE(MeshField), HierarchicalWindingNumberMatchesExactSum) {
   }
 }
 
+// moved(): a skinned target's posed metrics move the bind field's vertices instead of building it again. Bent and
+// twisted (a non-rigid move), every shape must answer as a field built from the moved mesh does: the same closest
+// distance (exact in both, up to rounding), inside where ray parity says inside (closed shapes), winding numbers within the
+// expansion's accuracy; wrong sizes and non-finite vertices are one-line Input errors.
+TEST(FF_SUITE(MeshField), MovedFieldAnswersAsOneBuiltFromTheMovedMesh) {
+  auto shapes = closed_shapes();
+  shapes.push_back({"sheet", test::plane_sheet(10)});
+  shapes.push_back({"overlapping spheres", test::two_overlapping_spheres()});
+  for (const auto& [name, mesh] : shapes) {
+    const MeshField bind = field_of(mesh);
+    const Aabb b = mesh.bounds();
+    TriangleMesh bent = mesh;
+    int a = 0;  // along the longest axis a: twist about it by up to 0.6 rad, bend by t², stretch by 20 %
+    b.size().maxCoeff(&a);
+    for (Vec3f& v : bent.vertices) {
+      const float t = (v[a] - b.min[a]) / b.size()[a];
+      const Eigen::AngleAxisf twist(0.6f * t, Vec3f::Unit(a));
+      v = twist * v;
+      v[(a + 1) % 3] += 0.3f * b.size().norm() * t * t;
+      v[(a + 2) % 3] *= 1.2f;
+    }
+    auto moved = bind.moved(bent.vertices);
+    ASSERT_TRUE(moved.has_value()) << name << ": " << moved.error().message;
+    const MeshField built = field_of(bent);
+    EXPECT_NEAR(moved->area(), built.area(), 1e-6 * built.area()) << name;
+    EXPECT_TRUE(moved->bounds().min.isApprox(built.bounds().min) && moved->bounds().max.isApprox(built.bounds().max))
+        << name;
+    const auto p = probes(bent, kProbes, 13);
+    std::size_t parity_disagree = 0;
+    double worst_w = 0.0;
+    for (const auto& x : p) {
+      // Equal up to rounding (a triangle's corners may be taken in another order, the sheet's orientation flipped).
+      EXPECT_NEAR(moved->closest(x).distance, built.closest(x).distance, 1e-6f * b.size().norm()) << name << " at " << str(x);
+      worst_w = std::max(worst_w, std::abs(double(moved->winding_number(x)) - moved->winding_number_exact(x)));
+      if (name != "sheet" && name != "overlapping spheres")
+        parity_disagree += moved->inside(x) != inside_by_ray_parity(bent, x);
+    }
+    EXPECT_LT(worst_w, 0.02) << name;
+    EXPECT_EQ(parity_disagree, 0u) << name;
+  }
+  const MeshField f = field_of(test::uv_sphere(1.0f, 8));
+  const auto few = f.moved(std::vector<Vec3f>(3, Vec3f::Zero()));
+  ASSERT_FALSE(few.has_value());
+  EXPECT_EQ(few.error().kind, Error::Kind::Input);
+  EXPECT_NE(few.error().message.find("vertices"), std::string::npos) << few.error().message;
+  auto nan = test::uv_sphere(1.0f, 8).vertices;
+  nan[5].y() = std::numeric_limits<float>::quiet_NaN();
+  const auto bad = f.moved(nan);
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_EQ(bad.error().kind, Error::Kind::Input);
+  EXPECT_NE(bad.error().message.find("vertex 5"), std::string::npos) << bad.error().message;
+}
+
 TEST(FF_SUITE(MeshField), SphereWithHoleStillReadsAsSolid) {
   const TriangleMesh mesh = test::sphere_with_hole(6, 1.0f, kSegments);
   const MeshField f = field_of(mesh);
