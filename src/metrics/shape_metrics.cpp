@@ -61,23 +61,22 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
   return shape;
 }
 
-Result<TargetShape> TargetShape::posed(const TargetShape& bind, std::span<const Vec3f> posed_controls,
-                                       std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world) {
-  if (posed_controls.size() != bind.sample_count() || bind_from_world.size() != posed_controls.size())
-    return input_error(fmt::format("metrics: a posed shape needs one position and one matrix per sample ({}), got {} and {}",
-                                   bind.sample_count(), posed_controls.size(), bind_from_world.size()));
+Result<TargetShape> TargetShape::posed(const TargetShape& bind, sampling::MeshField posed_field,
+                                       std::span<const Vec3f> posed_controls) {
+  if (posed_controls.size() != bind.sample_count())
+    return input_error(fmt::format("metrics: a posed shape needs one position per sample ({}), got {}",
+                                   bind.sample_count(), posed_controls.size()));
   Aabb box;
   for (std::size_t i = 0; i < posed_controls.size(); ++i) {
-    if (!posed_controls[i].allFinite() || !bind_from_world[i].allFinite())
-      return input_error(fmt::format("metrics: posed control sample {} has a non-finite position or pose", i));
+    if (!posed_controls[i].allFinite())
+      return input_error(fmt::format("metrics: posed control sample {} has a non-finite position", i));
     box.extend(posed_controls[i]);
   }
   const float diagonal = box.size().norm();
   if (!(diagonal > 0.0f))
     return input_error("metrics: the posed control samples span no extent (a single point); E would be undefined");
   TargetShape shape;
-  shape.sdf_ = bind.sdf_;
-  shape.bind_from_world_ = std::move(bind_from_world);
+  shape.field_ = std::make_shared<const sampling::MeshField>(std::move(posed_field));
   shape.grid_ = core::PointGrid(posed_controls, bind.control_spacing_, box);
   shape.controls_ = core::PointTree(posed_controls);
   shape.box_ = box;
@@ -88,16 +87,25 @@ Result<TargetShape> TargetShape::posed(const TargetShape& bind, std::span<const 
 }
 
 float TargetShape::signed_distance(const Vec3f& rest_point) const {
-  float d;
-  if (bind_from_world_.empty()) {
-    d = sdf_->distance(rest_point);
-  } else {
-    if (!rest_point.allFinite()) return std::numeric_limits<float>::quiet_NaN();
-    const core::PointTree::Nearest nb = controls_.nearest(rest_point);
-    const Eigen::Matrix<float, 3, 4>& a = bind_from_world_[controls_.original(nb.slot)];
-    d = sdf_->distance(a.leftCols<3>() * rest_point + a.col(3));
-  }
+  if (!rest_point.allFinite()) return std::numeric_limits<float>::quiet_NaN();
+  const float d = field_ ? field_->signed_distance(rest_point) : sdf_->distance(rest_point);
   return sheet_ ? std::abs(d) - 0.5f * control_spacing_ : d;
+}
+
+TargetShape::Where TargetShape::classify(const Vec3f& p, float r) const {
+  if (!field_) {
+    const float d = signed_distance(p);
+    return {d <= r, d > 2.0f * r};
+  }
+  if (!p.allFinite()) return {};
+  if (sheet_) {  // |distance| − d_c/2: only the surface within 2r + d_c/2 can make it inside, or not splash
+    const float half = 0.5f * control_spacing_;
+    const float d = field_->closest(p, 2.0f * r + half).distance - half;  // +inf beyond
+    return {d <= r, d > 2.0f * r};
+  }
+  if (field_->inside(p)) return {true, false};  // signed distance < 0
+  const float d = field_->closest(p, 2.0f * r).distance;  // outside: the distance itself, +inf beyond 2r
+  return {d <= r, d > 2.0f * r};
 }
 
 float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {
@@ -106,9 +114,8 @@ float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {
 }
 
 std::size_t TargetShape::bytes() const {
-  // A posed shape shares its bind shape's SDF: counted there, not again.
-  return sizeof(*this) - sizeof(grid_) - sizeof(controls_) + (bind_from_world_.empty() ? sdf_->bytes() : 0) +
-         grid_.bytes() + controls_.bytes() + bind_from_world_.size() * sizeof(bind_from_world_[0]);
+  return sizeof(*this) - sizeof(grid_) - sizeof(controls_) + (sdf_ ? sdf_->bytes() : 0) +
+         (field_ ? field_->bytes() : 0) + grid_.bytes() + controls_.bytes();
 }
 
 FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,
@@ -140,11 +147,19 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
   const double r = particle_radius;
 
   // Forward: each fluid particle's distance to the nearest sample, and its signed distance.
+  // A posed shape answers inside and splash directly (classify: its exact field is costly to ask for the distance).
   std::vector<float> to_sample(m.fluid), sdf(m.fluid);
   for_each_chunk(n, [&](std::int64_t begin, std::int64_t end) {
     for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
       to_sample[i] = shape.nearest_sample_distance(x[i]);
-      sdf[i] = shape.signed_distance(x[i]);
+      if (shape.posed()) {
+        const TargetShape::Where w = shape.classify(x[i], static_cast<float>(r / s));
+        // Stand-ins the thresholds below read as the same answers: inside ⟺ ≤ r, splash ⟺ > 2r.
+        sdf[i] = w.inside ? 0.0f : w.splash ? std::numeric_limits<float>::infinity()
+                                            : static_cast<float>(1.5 * r / s);
+      } else {
+        sdf[i] = shape.signed_distance(x[i]);
+      }
     }
   });
 

@@ -20,6 +20,7 @@
 #include "io/triangle_mesh.h"
 #include "core/point_grid.h"
 #include "core/point_tree.h"
+#include "sampling/mesh_field.h"
 #include "sampling/sdf_grid.h"
 
 #include <Eigen/Geometry>
@@ -47,23 +48,32 @@ class TargetShape {
 
   /// A skinned target's shape at one pose, cheap enough for every measured frame: the samples posed
   /// (`posed_controls`, in the order `bind` was built with) give the grid, tree, box and L, and the signed distance is
-  /// `bind`'s, shared, reached through the inverse pose of the nearest posed sample: a point x is measured at
-  /// bind_from_world[i] · x, i its nearest posed sample. Where the skin moves rigidly that is the posed mesh's signed
-  /// distance exactly; across a blended joint it is the bind distance seen through the local blend (measured against
-  /// rebuilding the posed mesh's shape in skinned_target_test). Rebuilding costs the SDF grid and its winding numbers
-  /// (~2 s a frame for the 9k-sample character); this costs a grid and tree over the samples and one tree query per
-  /// fluid particle. Errors: Input for a size mismatch or a non-finite sample or matrix.
-  static Result<TargetShape> posed(const TargetShape& bind, std::span<const Vec3f> posed_controls,
-                                   std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world);
+  /// the posed mesh's own (`posed_field`: the bind mesh's field moved to the posed vertices, MeshField::moved),
+  /// queried exactly (closest triangle and winding number through its BVH) instead of on a grid. Rebuilding the posed
+  /// mesh's SDF grid as build() does costs ~0.5–2 s a frame for the character. `bind` gives d_c and whether the
+  /// target is a sheet. Errors: Input for a size mismatch or a non-finite sample.
+  static Result<TargetShape> posed(const TargetShape& bind, sampling::MeshField posed_field,
+                                   std::span<const Vec3f> posed_controls);
 
   /// Signed distance to the mesh surface (rest frame, m, negative inside) by trilinear interpolation of the grid; beyond
   /// the grid box (3 d_c from the mesh), the boundary value plus the distance to the box: positive, an upper
-  /// bound. NaN for a non-finite point. A posed shape (posed()) maps the point to the bind pose first.
+  /// bound. NaN for a non-finite point. A posed shape (posed()) answers from its mesh's field, exactly, at any range
+  /// (inside surfaces of overlapping parts count there: a point inside the union near one reads a small negative
+  /// distance, which changes no inside or splash share).
   /// An open sheet (a mesh that encloses no volume: its samples are one surface layer, and the fluid was sized as one
   /// particle per sample) is measured as the slab one sample spacing thick that its samples stand for: |distance to the
   /// sheet| − d_c/2, so inside and splash mean for it what they mean for a solid. Its grid's own sign says nothing
   /// (a winding number of ±1/2 either side of an open sheet).
   float signed_distance(const Vec3f& rest_point) const;
+  /// What measure() counts a point (rest frame) as: inside (signed distance ≤ r) and splash (> 2r), the same answers
+  /// as testing signed_distance(p), and what measure() uses for a posed shape, where it is ~4× cheaper: the winding
+  /// number alone settles a point inside the mesh, and a point outside needs only the surface within 2r. NaN: neither.
+  struct Where {
+    bool inside = false, splash = false;
+  };
+  Where classify(const Vec3f& rest_point, float r) const;
+  /// Whether this is a posed shape (posed()).
+  bool posed() const { return field_ != nullptr; }
   /// Whether the target is an open sheet (above).
   bool sheet() const { return sheet_; }
   /// Exact Euclidean distance to the closest control sample (rest frame, m), at any range: the samples' grid
@@ -80,12 +90,13 @@ class TargetShape {
 
   /// The control samples in cell order (their grid), for measure().
   const core::PointGrid& control_grid() const { return grid_; }
+  /// The SDF grid of a built (not posed) shape.
   const sampling::SdfGrid& sdf() const { return *sdf_; }
 
  private:
   TargetShape() = default;
-  std::shared_ptr<const sampling::SdfGrid> sdf_;  // shared by a bind shape and its posed shapes
-  std::vector<Eigen::Matrix<float, 3, 4>> bind_from_world_;  // posed shapes only: per sample, input order
+  std::shared_ptr<const sampling::SdfGrid> sdf_;         // bind (built) shapes only
+  std::shared_ptr<const sampling::MeshField> field_;     // posed shapes only: the posed mesh
   core::PointGrid grid_;
   core::PointTree controls_;
   Aabb box_;

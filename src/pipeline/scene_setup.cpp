@@ -85,7 +85,8 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
       FF_TRY(sampling::SampleSkin w, sampling::sample_skin_weights(geometry[i].mesh, *geometry[i].field, skin->skin,
                                                                   ct.set.position, ct.set.spacing, how));
       TargetShapes::Skinned sk{skin, geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
-                               w.joints, w.weights, ct.set.spacing};
+                               w.joints, w.weights, ct.set.spacing,
+                               std::make_shared<const sampling::MeshField>(*geometry[i].field)};
       ts.skinned = std::move(sk);
       ct.skin = skin;
       ct.skin_joints = std::move(w.joints);
@@ -103,25 +104,19 @@ Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const
   std::vector<io::Mat4f> K;
   sk.skin->world_joint_matrices(time, K);
   control::PosedJoints joints;
-  joints.set(K, sk.skin->spec.skinning);
-  // The keyframed pose as one affine map: x ↦ pivot + translate + s R (x − pivot).
-  Eigen::Affine3f P = Eigen::Affine3f::Identity();
-  P.linear() = pose.scale * pose.rotation;
-  P.translation() = pose.pivot + pose.translate - P.linear() * pose.pivot;
-  const std::size_t m = sk.bind_samples.size();
-  std::vector<Vec3f> samples(m);
-  std::vector<Eigen::Matrix<float, 3, 4>> back(m);
-  core::parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+  joints.set(std::move(K), sk.skin->spec.skinning);
+  std::vector<Vec3f> vertices(sk.bind_mesh.vertices.size());
+  core::parallel_for(static_cast<std::int64_t>(vertices.size()), [&](std::int64_t vv) {
+    const auto v = static_cast<std::size_t>(vv);
+    vertices[v] = pose.apply(joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]));
+  });
+  std::vector<Vec3f> samples(sk.bind_samples.size());
+  core::parallel_for(static_cast<std::int64_t>(samples.size()), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
-    // World → bind through this sample's blended skin matrix (its linear blend; for dual-quaternion skinning this
-    // linear blend of the same joints stands in for the rigid one, an approximation not measured separately).
-    Eigen::Affine3f W;
-    W.matrix() = io::blend_matrix(K, sk.sample_joints[i], sk.sample_weights[i]);
-    W = P * W;
-    back[i] = W.inverse(Eigen::Affine).matrix().topRows<3>();
   });
-  return metrics::TargetShape::posed(bind, samples, std::move(back));
+  FF_TRY(sampling::MeshField field, sk.bind_field->moved(vertices));
+  return metrics::TargetShape::posed(bind, std::move(field), samples);
 }
 
 std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {

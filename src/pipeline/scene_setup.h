@@ -39,6 +39,8 @@ struct TargetShapes {
     std::vector<std::array<std::uint16_t, io::kMaxInfluences>> sample_joints;
     std::vector<std::array<float, io::kMaxInfluences>> sample_weights;
     float spacing = 0.0f;
+    /// The bind mesh's field, which posed_shape moves to each pose (MeshField::moved).
+    std::shared_ptr<const sampling::MeshField> bind_field;
   };
   std::optional<Skinned> skinned;
   const metrics::TargetShape& at(double t) const {
@@ -78,9 +80,9 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
                                         const std::filesystem::path& cache_dir,
                                         const std::filesystem::path& report_dir, core::Progress& progress);
 
-/// A skinned target's metric shape at `time`, as every measured frame takes it: its samples skinned, then posed by
-/// `pose` (its keyframes), over `bind`'s signed distance reached through each sample's inverse skin matrix
-/// (metrics::TargetShape::posed). `bind`: the target's shape at the bind pose (TargetShapes::shape[0]).
+/// A skinned target's metric shape at `time`, as every measured frame takes it: its mesh and samples skinned, then
+/// posed by `pose` (its keyframes); the signed distance is the posed mesh's own, exact (metrics::TargetShape::posed).
+/// `bind`: the target's shape at the bind pose (TargetShapes::shape[0]).
 Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& skinned,
                                          const control::Pose& pose, double time);
 /// The same shape rebuilt from the posed mesh (its own SDF grid and winding numbers: ~2 s for the 9k-sample character):
