@@ -159,6 +159,10 @@ json live_hello(const pipeline::LiveScene& s, bool paused, bool surface) {
 // the mesh the viewer shows. Made on the simulation thread between frames, at most every kSurfaceEvery seconds of
 // wall time: 10k particles take ~0.1 s, so the simulation keeps most of its time.
 constexpr double kSurfaceEvery = 0.5;
+// The HUD's shape metrics are measured at most this often (s of wall time), the last ones shown in between: a number
+// read by a person needs no more than a few updates a second, and a skinned target's exact posed metrics cost ~23 ms
+// on top of an ~80 ms frame at 9k particles (bench/RESULTS.md "Animated characters, fifth part").
+constexpr double kMeasureEvery = 0.25;
 
 void publish_surface(Shared& sh, const pipeline::LiveScene& scene) {
   core::Stopwatch clock;
@@ -209,7 +213,9 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
   const bool paced = opt.realtime || cap > 0;
   Pacer pace(opt.realtime ? (cap > 0 ? std::min(cap, scene.fps()) : scene.fps()) : (cap > 0 ? cap : scene.fps()));
   std::uint64_t frames = 0;
-  double step_total = 0.0, last_surface = -kSurfaceEvery;
+  double step_total = 0.0, last_surface = -kSurfaceEvery, last_measure = -kMeasureEvery;
+  float shown_error = NAN;
+  std::uint32_t shown_controlled = 0;
   int surface_frame = -1;
   // The solver keeps its particles in cell order, which changes between frames; the viewer interpolates each
   // particle between two frames, so frames go out in particle-id order (as a run's PLY frames are written).
@@ -229,6 +235,7 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
         case Command::Kind::Restart:
           st = scene.restart();
           rate.reset();
+          last_measure = -kMeasureEvery, shown_error = NAN, shown_controlled = 0;  // a fresh start: measure at once
           if (st.ok()) publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
           break;
         case Command::Kind::Controller: st = scene.set_controller(c.name); break;
@@ -261,7 +268,8 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
       pace.hold();
       continue;
     }
-    auto f = scene.step();
+    const bool measure = pace.elapsed() - last_measure >= kMeasureEvery;
+    auto f = scene.step(measure);
     if (!f) {
       error_text(sh, fmt::format("the simulation stopped: {}; restart to go on", f.error().message));
       sh.paused = true;
@@ -270,8 +278,12 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
     }
     ++frames;
     step_total += f->step_seconds;
+    if (measure) {
+      last_measure = pace.elapsed();
+      shown_error = static_cast<float>(f->error_rate), shown_controlled = static_cast<std::uint32_t>(f->controlled);
+    }
     const FrameInfo info{static_cast<std::uint32_t>(f->frame), f->time, static_cast<float>(1e3 * f->step_seconds),
-                         static_cast<float>(f->error_rate), rate.tick(), static_cast<std::uint32_t>(f->controlled)};
+                         shown_error, rate.tick(), shown_controlled};
     publish_particles(info);
     if (paced) {
       // At most real time: the viewer shows the forming at its true speed when the simulation is faster.
