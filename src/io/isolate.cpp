@@ -26,6 +26,25 @@
 #endif
 
 namespace ff::io {
+
+std::string one_line(std::string_view s, std::size_t max_length) {
+  std::string out;
+  out.reserve(std::min(s.size(), max_length + 3));
+  for (const char c : s) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == ' ' || c == 0x7f) {
+      if (!out.empty() && out.back() != ' ') out.push_back(' ');
+    } else {
+      out.push_back(c);
+    }
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  if (out.size() > max_length) {
+    out.resize(max_length);
+    out += "...";
+  }
+  return out;
+}
+
 namespace {
 
 /// Writes all of `data` (the child's side); false when the parent has gone.

@@ -58,6 +58,10 @@ class AnswerWriter {
   std::string out_;
 };
 
+/// `s` as one printable line: control characters (newlines, tabs …) become spaces, runs of spaces collapse, the ends
+/// are trimmed, and text longer than `max_length` is cut (marked "...").
+std::string one_line(std::string_view s, std::size_t max_length = 300);
+
 /// Reading an answer back. Every read is bounds-checked, and a count is checked against the bytes left before
 /// anything is allocated for it; after one failed read every later read fails too, so a caller may read a whole
 /// record and test ok() once.
@@ -93,6 +97,16 @@ class AnswerReader {
   bool get_count(std::uint64_t& n, std::size_t min_bytes) {
     if (!get(n) || n > in_.size() / std::max<std::size_t>(min_bytes, 1)) return ok_ = false;
     return true;
+  }
+  /// The rest of an answer in which the child refused the file: its error, as AnswerWriter put an Error's kind and
+  /// message. Only a refusal about the file (Error::Kind::Input) whose message has something printable is one, and
+  /// nothing may follow it; the message comes back as one_line. Else false (a garbled answer).
+  bool get_input_error(std::string& message) {
+    std::uint8_t kind = 0;
+    if (!get(kind) || !get_string(message) || !at_end() || kind != static_cast<std::uint8_t>(Error::Kind::Input))
+      return ok_ = false;
+    message = one_line(message);
+    return ok_ = !message.empty();
   }
   void fail() { ok_ = false; }
   bool ok() const { return ok_; }

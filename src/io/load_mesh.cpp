@@ -51,8 +51,6 @@ namespace fs = std::filesystem;
 
 /// A triangle is degenerate when |(b−a)×(c−a)| ≤ kDegenerateFactor × (bbox diagonal)².
 constexpr double kDegenerateFactor = 1e-12;
-/// Assimp error strings longer than this are cut (a parser may quote a whole line of the file).
-constexpr std::size_t kMaxReasonLength = 300;
 /// How much of a file check_before_assimp reads to find the OFF/PLY header.
 constexpr std::uintmax_t kHeaderBytes = 64 * 1024;
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
@@ -67,26 +65,6 @@ constexpr int kRemovedComponents = aiComponent_NORMALS | aiComponent_TANGENTS_AN
                                    aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
                                    aiComponent_TEXTURES | aiComponent_LIGHTS | aiComponent_CAMERAS |
                                    aiComponent_MATERIALS;
-
-/// `s` as one printable line: control characters (newlines, tabs …) become spaces, runs of spaces collapse,
-/// the ends are trimmed and very long text is cut.
-std::string one_line(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (const char c : s) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == ' ' || c == 0x7f) {
-      if (!out.empty() && out.back() != ' ') out.push_back(' ');
-    } else {
-      out.push_back(c);
-    }
-  }
-  while (!out.empty() && out.back() == ' ') out.pop_back();
-  if (out.size() > kMaxReasonLength) {
-    out.resize(kMaxReasonLength);
-    out += "...";
-  }
-  return out;
-}
 
 /// The path as shown in messages: a control character in a file name must not break the one-line rule.
 std::string shown(const fs::path& path) {
@@ -513,14 +491,9 @@ Result<TriangleMesh> decode(const fs::path& path, std::string_view bytes, std::s
   stats.source_meshes = meshes;
   stats.dropped_non_triangles = other;
   if (ok == 0) {
-    std::uint8_t kind = 0;
-    std::string message;
     // The child's errors are all about the file (file_error): any other kind is a garbled answer, not an exit 1.
-    if (!in.get(kind) || !in.get_string(message) || !in.at_end() ||
-        kind != static_cast<std::uint8_t>(Error::Kind::Input))
-      return garbled;
-    message = one_line(message);
-    return message.empty() ? garbled : input_error(std::move(message));
+    std::string message;
+    return in.get_input_error(message) ? input_error(std::move(message)) : garbled;
   }
   std::vector<std::array<float, 3>> xyz;
   TriangleMesh m;

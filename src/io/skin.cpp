@@ -330,14 +330,9 @@ Result<std::optional<Skin>> decode_skin(const fs::path& path, std::string_view b
   std::uint8_t tag = 0;
   if (!r.get(tag)) return garbled;
   if (tag == 0) {
-    std::uint8_t kind = 0;
+    // The child's errors are all about the file (skin_error): any other kind is a garbled answer, not an exit 1.
     std::string message;
-    // The child's errors are all about the file (skin_error), one line each: anything else is a garbled answer.
-    const auto control = [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; };
-    if (!r.get(kind) || !r.get_string(message) || !r.at_end() || message.empty() ||
-        kind != static_cast<std::uint8_t>(Error::Kind::Input) || std::any_of(message.begin(), message.end(), control))
-      return garbled;
-    return input_error(message);
+    return r.get_input_error(message) ? input_error(std::move(message)) : garbled;
   }
   if (tag == 2) return r.at_end() ? Result<std::optional<Skin>>(std::optional<Skin>{}) : garbled;
   if (tag != 1) return garbled;

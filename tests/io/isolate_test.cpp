@@ -124,5 +124,26 @@ TEST(RunIsolated, WorksFromSeveralThreadsAtOnce) {
   for (int t = 0; t < 8; ++t) EXPECT_EQ(ok[t], 5) << "thread " << t;
 }
 
+// A child that refused its file answers with the Error's kind and message (mesh and skin imports alike): the parent
+// takes it as the file's one-line error only when it is an Input error with something printable and nothing after.
+TEST(AnswerReader, AChildsRefusalIsOneLineInputErrorOrGarbled) {
+  const auto refusal = [](Error::Kind kind, const std::string& message, const std::string& after = "") {
+    AnswerWriter w;
+    w.put(static_cast<std::uint8_t>(kind));
+    w.put_string(message);
+    return w.take() + after;
+  };
+  std::string got;
+  const std::string ok = refusal(Error::Kind::Input, "m.obj:\tbad\n\nline ");
+  EXPECT_TRUE(AnswerReader(ok).get_input_error(got));
+  EXPECT_EQ(got, "m.obj: bad line");
+  EXPECT_FALSE(AnswerReader(refusal(Error::Kind::Numerical, "m.obj: x")).get_input_error(got));
+  EXPECT_FALSE(AnswerReader(refusal(Error::Kind::Cancelled, "m.obj: x")).get_input_error(got));
+  EXPECT_FALSE(AnswerReader(refusal(Error::Kind::Input, "\n\t ")).get_input_error(got));
+  EXPECT_FALSE(AnswerReader(refusal(Error::Kind::Input, "m.obj: x", "!")).get_input_error(got));
+  for (std::size_t cut = 0; cut < ok.size(); ++cut) EXPECT_FALSE(AnswerReader(ok.substr(0, cut)).get_input_error(got)) << cut;
+  EXPECT_EQ(one_line(std::string(400, 'x')).size(), 303u);  // cut at 300, marked "..."
+}
+
 }  // namespace
 }  // namespace ff::io
