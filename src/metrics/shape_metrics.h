@@ -66,8 +66,9 @@ class TargetShape {
   /// (a winding number of ±1/2 either side of an open sheet).
   float signed_distance(const Vec3f& rest_point) const;
   /// What measure() counts a point (rest frame) as: inside (signed distance ≤ r) and splash (> 2r), the same answers
-  /// as testing signed_distance(p), and what measure() uses for a posed shape, where it is ~4× cheaper: the winding
-  /// number alone settles a point inside the mesh, and a point outside needs only the surface within 2r. NaN: neither.
+  /// as testing signed_distance(p), and what measure() uses for a posed shape, where it is cheaper: the winding number
+  /// alone settles a point inside the mesh (bench_mesh_field: 2.7× the rate of a signed distance), and a point outside
+  /// needs only the surface within 2r. NaN: neither.
   struct Where {
     bool inside = false, splash = false;
   };
