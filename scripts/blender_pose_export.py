@@ -6,33 +6,21 @@
 #       --file FILE --out PREFIX [--action NAME-PREFIX] --times T1,T2,...
 # Prints one line "FLUIDFORM_POSE {json}": the action played, the fps, and the OBJ files written.
 import json
+import os
 import sys
 
 import bpy
 
-args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-opt = {}
-for i in range(0, len(args) - 1, 2):
-    opt[args[i].lstrip("-")] = args[i + 1]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_skinned  # noqa: E402  (beside this script)
+
+opt = blender_skinned.options()
 path, prefix = opt["file"], opt["out"]
 times = [float(t) for t in opt["times"].split(",")]
-bpy.ops.wm.read_factory_settings(use_empty=True)
-if path.lower().endswith((".glb", ".gltf")):
-    bpy.ops.import_scene.gltf(filepath=path, import_shading='SMOOTH')
-elif path.lower().endswith(".fbx"):
-    bpy.ops.import_scene.fbx(filepath=path)
-else:
-    raise SystemExit(f"blender_pose_export: {path}: only glTF/GLB and FBX are imported here")
+blender_skinned.import_file(path, "blender_pose_export")
 scene = bpy.context.scene
-actions = sorted(bpy.data.actions, key=lambda a: a.name)
-want = opt.get("action", "")
-chosen = next((a for a in actions if a.name.startswith(want)), None) if want else (actions[0] if actions else None)
-if chosen is None:
-    raise SystemExit(f"blender_pose_export: no action '{want}' among {[a.name for a in actions]}")
-for o in bpy.data.objects:
-    if o.type == 'ARMATURE':
-        o.animation_data_create()
-        o.animation_data.action = chosen
+chosen = blender_skinned.choose_action(opt.get("action", ""), "blender_pose_export")
+blender_skinned.play(chosen)
 meshes = [o for o in bpy.data.objects if o.type == 'MESH']
 written = []
 for i, t in enumerate(times):

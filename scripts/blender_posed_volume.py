@@ -4,30 +4,21 @@
 #   blender -b --factory-startup -noaudio --python-exit-code 1 -P scripts/blender_posed_volume.py -- \
 #       --file FILE [--action NAME-PREFIX] [--steps 10]
 # Prints "bind V" and, per frame, "frame F V (P % of bind)", in Blender's units (the importer's scale).
+import os
 import sys
 
 import bmesh
 import bpy
 
-args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-opt = {}
-for i in range(0, len(args) - 1, 2):
-    opt[args[i].lstrip("-")] = args[i + 1]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_skinned  # noqa: E402  (beside this script)
+
+opt = blender_skinned.options()
 path = opt["file"]
 steps = int(opt.get("steps", "10"))
-bpy.ops.wm.read_factory_settings(use_empty=True)
-if path.lower().endswith((".glb", ".gltf")):
-    bpy.ops.import_scene.gltf(filepath=path, import_shading='SMOOTH')
-elif path.lower().endswith(".fbx"):
-    bpy.ops.import_scene.fbx(filepath=path)
-else:
-    raise SystemExit(f"blender_posed_volume: {path}: only glTF/GLB and FBX are imported here")
+blender_skinned.import_file(path, "blender_posed_volume")
 scene = bpy.context.scene
-actions = sorted(bpy.data.actions, key=lambda a: a.name)
-want = opt.get("action", "")
-chosen = next((a for a in actions if a.name.startswith(want)), None) if want else (actions[0] if actions else None)
-if chosen is None:
-    raise SystemExit(f"blender_posed_volume: no action '{want}' among {[a.name for a in actions]}")
+chosen = blender_skinned.choose_action(opt.get("action", ""), "blender_posed_volume")
 meshes = [o for o in bpy.data.objects if o.type == 'MESH']
 
 
@@ -49,10 +40,7 @@ def volume(objects, evaluated):
 
 bind = volume(meshes, False)
 print(f"bind {bind:.6g}")
-for o in bpy.data.objects:
-    if o.type == 'ARMATURE':
-        o.animation_data_create()
-        o.animation_data.action = chosen
+blender_skinned.play(chosen)
 lo, hi = chosen.frame_range
 for k in range(steps + 1):
     f = lo + (hi - lo) * k / steps

@@ -146,19 +146,20 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
   const double s = world_scale;
   const double r = particle_radius;
 
-  // Forward: each fluid particle's distance to the nearest sample, and its signed distance.
-  // A posed shape answers inside and splash directly (classify: its exact field is costly to ask for the distance).
-  std::vector<float> to_sample(m.fluid), sdf(m.fluid);
+  // Forward: each fluid particle's distance to the nearest sample, and whether it is inside (signed distance ≤ r)
+  // or splashed (> 2r). A posed shape answers those directly (classify: its exact field is costly to ask for the
+  // distance); a built one by its grid's signed distance, in world metres.
+  std::vector<float> to_sample(m.fluid);
+  std::vector<std::uint8_t> in(m.fluid), out(m.fluid);
   for_each_chunk(n, [&](std::int64_t begin, std::int64_t end) {
     for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
       to_sample[i] = shape.nearest_sample_distance(x[i]);
       if (shape.posed()) {
         const TargetShape::Where w = shape.classify(x[i], static_cast<float>(r / s));
-        // Stand-ins the thresholds below read as the same answers: inside ⟺ ≤ r, splash ⟺ > 2r.
-        sdf[i] = w.inside ? 0.0f : w.splash ? std::numeric_limits<float>::infinity()
-                                            : static_cast<float>(1.5 * r / s);
+        in[i] = w.inside, out[i] = w.splash;
       } else {
-        sdf[i] = shape.signed_distance(x[i]);
+        const double d = double(shape.signed_distance(x[i])) * s;
+        in[i] = d <= r, out[i] = d > 2.0 * r;
       }
     }
   });
@@ -201,9 +202,8 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
   const double sum_all = core::deterministic_sum(n, [&](std::int64_t i) { return at(to_sample, i); });
   const double sum_ctrl =
       core::deterministic_sum(n, [&](std::int64_t i) { return is_ctrl(i) ? at(to_sample, i) : 0.0; });
-  const double inside = core::deterministic_sum(n, [&](std::int64_t i) { return at(sdf, i) * s <= r ? 1.0 : 0.0; });
-  const double splash =
-      core::deterministic_sum(n, [&](std::int64_t i) { return at(sdf, i) * s > 2.0 * r ? 1.0 : 0.0; });
+  const double inside = core::deterministic_sum(n, [&](std::int64_t i) { return double(in[std::size_t(i)]); });
+  const double splash = core::deterministic_sum(n, [&](std::int64_t i) { return double(out[std::size_t(i)]); });
   const double sum_bwd = core::deterministic_sum(m_samples, [&](std::int64_t j) { return at(to_fluid, j); });
 
   const double count = double(m.fluid);

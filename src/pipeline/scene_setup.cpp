@@ -99,52 +99,52 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
   return out;
 }
 
-Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& sk,
-                                         const control::Pose& pose, double time) {
+namespace {
+
+using JointIds = std::vector<std::array<std::uint16_t, io::kMaxInfluences>>;
+using JointWeights = std::vector<std::array<float, io::kMaxInfluences>>;
+
+control::PosedJoints joints_at(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {
   std::vector<io::Mat4f> K;
   sk.skin->world_joint_matrices(time, K);
   control::PosedJoints joints;
-  joints.set(std::move(K), sk.skin->spec.skinning);
-  std::vector<Vec3f> vertices(sk.bind_mesh.vertices.size());
-  core::parallel_for(static_cast<std::int64_t>(vertices.size()), [&](std::int64_t vv) {
-    const auto v = static_cast<std::size_t>(vv);
-    vertices[v] = pose.apply(joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]));
-  });
-  std::vector<Vec3f> samples(sk.bind_samples.size());
-  core::parallel_for(static_cast<std::int64_t>(samples.size()), [&](std::int64_t ii) {
+  joints.set(std::move(K), method);
+  return joints;
+}
+
+// `bind` points skinned by `joints` with their influences, then moved by `pose` (none: skinned only).
+std::vector<Vec3f> skin_points(const control::PosedJoints& joints, const std::vector<Vec3f>& bind, const JointIds& ids,
+                               const JointWeights& weights, const control::Pose* pose) {
+  std::vector<Vec3f> x(bind.size());
+  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
-    samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
+    x[i] = joints.apply(ids[i], weights[i], bind[i]);
+    if (pose) x[i] = pose->apply(x[i]);
   });
+  return x;
+}
+
+}  // namespace
+
+Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& sk,
+                                         const control::Pose& pose, double time) {
+  const control::PosedJoints joints = joints_at(sk, time, sk.skin->spec.skinning);
+  const auto vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
+  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose);
   FF_TRY(sampling::MeshField field, sk.bind_field->moved(vertices));
   return metrics::TargetShape::posed(bind, std::move(field), samples);
 }
 
 std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {
-  std::vector<io::Mat4f> K;
-  sk.skin->world_joint_matrices(time, K);
-  control::PosedJoints joints;
-  joints.set(std::move(K), method);
-  std::vector<Vec3f> x(sk.bind_samples.size());
-  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    x[i] = joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]);
-  });
-  return x;
+  return skin_points(joints_at(sk, time, method), sk.bind_samples, sk.sample_joints, sk.sample_weights, nullptr);
 }
 
 Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
-  std::vector<io::Mat4f> K;
-  sk.skin->world_joint_matrices(time, K);
-  control::PosedJoints joints;
-  joints.set(std::move(K), sk.skin->spec.skinning);
+  const control::PosedJoints joints = joints_at(sk, time, sk.skin->spec.skinning);
   io::TriangleMesh mesh;
   mesh.triangles = sk.bind_mesh.triangles;
-  mesh.vertices.resize(sk.bind_mesh.vertices.size());
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-    mesh.vertices[v] = pose.apply(joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]));
-  std::vector<Vec3f> samples(sk.bind_samples.size());
-  for (std::size_t i = 0; i < samples.size(); ++i)
-    samples[i] = pose.apply(joints.apply(sk.sample_joints[i], sk.sample_weights[i], sk.bind_samples[i]));
+  mesh.vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
+  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose);
   return metrics::TargetShape::build(mesh, samples, sk.spacing);
 }
 
