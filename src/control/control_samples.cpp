@@ -20,6 +20,7 @@ Status ControlSamples::init(std::vector<ControlTarget> targets, std::string_view
   skin_ = std::move(checked.skin);
   target_joints_ = std::move(checked.skin_joints);
   target_weights_ = std::move(checked.skin_weights);
+  anchors_ = std::move(checked.anchors);
   moving_ = checked.moving;
   current_.assign(phases_.size(), 0);
   time_ = 0.0;
@@ -32,7 +33,7 @@ Status ControlSamples::init(std::vector<ControlTarget> targets, std::string_view
 // mesh.
 void ControlSamples::flatten() {
   position.clear(), rho_c.clear(), phi.clear(), target.clear(), mass.clear(), original.clear();
-  joints_.clear(), weights_.clear(), skinned_.clear();
+  joints_.clear(), weights_.clear(), skinned_.clear(), anchor_.clear();
   std::vector<std::pair<std::int64_t, Index>> order;
   for (std::size_t t = 0; t < phases_.size(); ++t) {
     const auto& s = phases_[t][current_[t]].set;
@@ -51,6 +52,7 @@ void ControlSamples::flatten() {
       joints_.push_back(skinned ? target_joints_[t][i] : std::array<std::uint16_t, io::kMaxInfluences>{});
       weights_.push_back(skinned ? target_weights_[t][i] : std::array<float, io::kMaxInfluences>{});
       skinned_.push_back(skinned ? 1 : 0);
+      anchor_.push_back(skinned && anchors_[t] ? static_cast<Index>(i) : kInvalidIndex);
       rho_c.push_back(s.density[i]);
       phi.push_back(options_.weights ? s.phi[i] : 1.0f);
       target.push_back(static_cast<std::uint8_t>(t));
@@ -64,6 +66,7 @@ void ControlSamples::flatten() {
       for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k].second];
     };
     permute(position), permute(rho_c), permute(phi), permute(target), permute(joints_), permute(weights_), permute(skinned_);
+    permute(anchor_);
     for (std::size_t k = 0; k < order.size(); ++k) original[k] = order[k].second;
   } else {
     for (std::size_t k = 0; k < original.size(); ++k) original[k] = static_cast<Index>(k);
@@ -94,36 +97,46 @@ void ControlSamples::flatten() {
 // Samples of moving targets follow their pose; densities keep their rest values (rigid motion keeps them exactly; a
 // scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow). u_c is the pose's
 // velocity over the sub-step (forward difference), so a rig that moves drags its fluid along. A skinned target's
-// samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind.
+// samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; an
+// open sheet's ride their posed triangles instead (SurfaceAnchors).
 // Their densities stay the bind pose's too (measured: see bench/RESULTS.md "Animated characters").
 void ControlSamples::pose(double time, float dt) {
   std::vector<Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);
   for (std::size_t t = 0; t < motion_.size(); ++t) now[t] = motion_[t].at(time);
   for (std::size_t t = 0; t < next.size(); ++t) next[t] = motion_[t].at(time + dt);
   now_joints_.resize(skin_.size()), next_joints_.resize(skin_.size());
+  now_vertices_.resize(skin_.size()), next_vertices_.resize(skin_.size());
   std::vector<io::Mat4f> K;
   for (std::size_t t = 0; t < skin_.size(); ++t) {
     if (!skin_[t]) continue;
     skin_[t]->world_joint_matrices(time, K);
     now_joints_[t].set(K, skin_[t]->spec.skinning);
+    if (anchors_[t]) anchors_[t]->pose_vertices(now_joints_[t], now_vertices_[t]);
     if (options_.velocities) {
       skin_[t]->world_joint_matrices(time + dt, K);
       next_joints_[t].set(K, skin_[t]->spec.skinning);
+      if (anchors_[t]) anchors_[t]->pose_vertices(next_joints_[t], next_vertices_[t]);
     }
   }
+  // Where a sample is (world, no keyframed pose): on its posed triangle, or skinned by its own weights.
+  const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices) {
+    const Index a = anchor_[i];
+    return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices)
+                              : joints.apply(joints_[i], weights_[i], rest_position_[i]);
+  };
   const float inv_dt = dt > 0.0f ? 1.0f / dt : 0.0f;
   core::parallel_for(static_cast<std::int64_t>(position.size()), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
     const auto t = target[i];
     if (skinned_[i]) {
-      const Vec3f x = now[t].apply(now_joints_[t].apply(joints_[i], weights_[i], rest_position_[i]));
+      const Vec3f x = now[t].apply(skinned_at(i, now_joints_[t], now_vertices_[t]));
       if (options_.normals) {
         // The normal turns with the blended linear part of its sample (a rotation where the skin moves rigidly).
         const io::Mat4f m = io::blend_matrix(now_joints_[t].matrices(), joints_[i], weights_[i]);
         normal[i] = now[t].rotation * (m.topLeftCorner<3, 3>() * rest_normal_[i]);
       }
       if (options_.velocities)
-        velocity[i] = (next[t].apply(next_joints_[t].apply(joints_[i], weights_[i], rest_position_[i])) - x) * inv_dt;
+        velocity[i] = (next[t].apply(skinned_at(i, next_joints_[t], next_vertices_[t])) - x) * inv_dt;
       position[i] = x;
       return;
     }

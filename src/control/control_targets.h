@@ -27,6 +27,9 @@ struct ControlTarget {
   std::shared_ptr<const TargetSkin> skin;
   std::vector<std::array<std::uint16_t, io::kMaxInfluences>> skin_joints;
   std::vector<std::array<float, io::kMaxInfluences>> skin_weights;
+  /// An open sheet's samples anchored to its triangles (control/skinning.h): posed on the posed triangles instead of
+  /// by their own weights. Null: by their weights.
+  std::shared_ptr<const SurfaceAnchors> anchors;
 };
 
 /// One of a target's sample sets and the time from which it is in use (the first: −∞).
@@ -44,6 +47,7 @@ struct CheckedTargets {
   std::vector<std::shared_ptr<const TargetSkin>> skin;  ///< per target (null: not skinned)
   std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> skin_joints;  ///< per target, per sample
   std::vector<std::vector<std::array<float, io::kMaxInfluences>>> skin_weights;
+  std::vector<std::shared_ptr<const SurfaceAnchors>> anchors;  ///< per target (null: posed by the samples' weights)
   bool moving = false;                             ///< any target keyframed or skinned
 };
 

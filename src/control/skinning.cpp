@@ -69,4 +69,54 @@ Vec3f PosedJoints::apply(const std::array<std::uint16_t, io::kMaxInfluences>& jo
   return q0.toRotationMatrix() * (s * bind) + t;
 }
 
+bool SurfaceAnchors::consistent(std::size_t samples) const {
+  const std::size_t nv = mesh.vertices.size();
+  if (triangle.size() != samples || bary.size() != samples || height.size() != samples || vertex_joints.size() != nv ||
+      vertex_weights.size() != nv)
+    return false;
+  for (const Index t : triangle)
+    if (t >= mesh.triangles.size()) return false;
+  for (const auto& tri : mesh.triangles)
+    for (const Index v : tri)
+      if (v >= nv) return false;
+  return true;
+}
+
+void SurfaceAnchors::pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const {
+  out.resize(mesh.vertices.size());
+  for (std::size_t v = 0; v < out.size(); ++v) out[v] = joints.apply(vertex_joints[v], vertex_weights[v], mesh.vertices[v]);
+}
+
+Vec3f SurfaceAnchors::place(std::size_t i, const std::vector<Vec3f>& posed) const {
+  const auto& tri = mesh.triangles[triangle[i]];
+  const Vec3f &a = posed[tri[0]], &b = posed[tri[1]], &c = posed[tri[2]];
+  const auto& w = bary[i];
+  Vec3f x = w[0] * a + w[1] * b + w[2] * c;
+  if (height[i] != 0.0f) {
+    const Vec3f n = (b - a).cross(c - a);
+    const float len = n.norm();
+    if (len > 0.0f) x += (height[i] / len) * n;
+  }
+  return x;
+}
+
+void triangle_anchor(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, std::array<float, 3>& bary,
+                     float& height) {
+  const Vec3f e1 = b - a, e2 = c - a, n = e1.cross(e2);
+  const float len2 = n.squaredNorm();
+  height = 0.0f;
+  if (!(len2 > 0.0f) || !std::isfinite(len2)) {  // degenerate: the nearest corner whole
+    const float da = (p - a).squaredNorm(), db = (p - b).squaredNorm(), dc = (p - c).squaredNorm();
+    bary = da <= db && da <= dc ? std::array<float, 3>{1, 0, 0}
+           : db <= dc           ? std::array<float, 3>{0, 1, 0}
+                                : std::array<float, 3>{0, 0, 1};
+    return;
+  }
+  // p − a = u e1 + v e2 + h n̂: the in-plane part solved by Cramer's rule on the normal's components.
+  const Vec3f q = p - a;
+  const float u = q.cross(e2).dot(n) / len2, v = e1.cross(q).dot(n) / len2;
+  bary = {1.0f - u - v, u, v};
+  height = q.dot(n) / std::sqrt(len2);
+}
+
 }  // namespace ff::control

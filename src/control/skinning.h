@@ -9,6 +9,7 @@
 #include "core/fields.h"
 #include "core/types.h"
 #include "io/skin.h"
+#include "io/triangle_mesh.h"
 
 #include <Eigen/Geometry>
 
@@ -81,5 +82,63 @@ class PosedJoints {
   std::vector<Eigen::Quaternionf> q0_, qe_;
   std::vector<Eigen::Matrix3f> stretch_;
 };
+
+
+/// An open sheet's samples ride their bind triangles. Sample i sits at barycentrics `bary[i]` of triangle
+/// `triangle[i]` of the bind mesh, `height[i]` along that triangle's unit normal (the mesh's winding); posed, it sits
+/// at the same barycentrics and height on the posed triangle, whose vertices are skinned by their own weights. So it
+/// stays on the posed sheet exactly. A sample skinned by its own (interpolated) weights does not: linear blend
+/// skinning of a blend of vertices is not the blend of the skinned vertices, and a coarse sheet bends at its
+/// vertices, cutting the corner the samples' smooth blend goes round (glTF2/simple_skin: 96.9 % of the fluid
+/// inside against the posed sheet, bench/RESULTS.md "Animated characters, sixth part"). A volume keeps its
+/// weight-skinned samples (its interior has no triangle to ride; tried, it cost the fluid more).
+struct SurfaceAnchors {
+  io::TriangleMesh mesh;  ///< the bind mesh, world (the target's transform applied)
+  std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vertex_joints;  ///< per vertex of `mesh`
+  std::vector<std::array<float, io::kMaxInfluences>> vertex_weights;
+  // Per sample of the target's first sample set.
+  std::vector<Index> triangle;
+  std::vector<std::array<float, 3>> bary;
+  std::vector<float> height;
+
+  /// Whether the arrays agree: one anchor per sample of `samples`, triangles and vertices in range.
+  bool consistent(std::size_t samples) const;
+  /// The mesh's vertices skinned by `joints` (world, posed; no keyframed pose).
+  void pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const;
+  /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices).
+  Vec3f place(std::size_t i, const std::vector<Vec3f>& posed) const;
+};
+
+/// Anchors for `samples` (world, bind pose) on `mesh`: each sample's closest triangle (`closest_triangle(i)`, an
+/// index into mesh.triangles), its barycentrics there and its height above it. Errors: Param for a triangle out of
+/// range or sizes that disagree.
+template <class ClosestTriangle>
+Result<SurfaceAnchors> anchor_samples(io::TriangleMesh mesh, std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vj,
+                                      std::vector<std::array<float, io::kMaxInfluences>> vw,
+                                      const std::vector<Vec3f>& samples, ClosestTriangle&& closest_triangle);
+
+// The barycentrics of p's projection into triangle (a, b, c), and its height along the unit normal (b−a)×(c−a)
+// (0 for a degenerate triangle: its corner is then taken whole).
+void triangle_anchor(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, std::array<float, 3>& bary,
+                     float& height);
+
+template <class ClosestTriangle>
+Result<SurfaceAnchors> anchor_samples(io::TriangleMesh mesh, std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vj,
+                                      std::vector<std::array<float, io::kMaxInfluences>> vw,
+                                      const std::vector<Vec3f>& samples, ClosestTriangle&& closest_triangle) {
+  SurfaceAnchors a;
+  a.mesh = std::move(mesh), a.vertex_joints = std::move(vj), a.vertex_weights = std::move(vw);
+  a.triangle.resize(samples.size()), a.bary.resize(samples.size()), a.height.resize(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Index t = closest_triangle(i);
+    if (t >= a.mesh.triangles.size()) return param_error("a control sample has no closest triangle on its sheet");
+    const auto& tri = a.mesh.triangles[t];
+    a.triangle[i] = t;
+    triangle_anchor(samples[i], a.mesh.vertices[tri[0]], a.mesh.vertices[tri[1]], a.mesh.vertices[tri[2]], a.bary[i],
+                    a.height[i]);
+  }
+  if (!a.consistent(samples.size())) return param_error("a sheet's skin weights do not match its vertices");
+  return a;
+}
 
 }  // namespace ff::control

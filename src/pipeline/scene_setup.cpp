@@ -86,7 +86,16 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
                                                                   ct.set.position, ct.set.spacing, how));
       TargetShapes::Skinned sk{skin, geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
                                w.joints, w.weights, ct.set.spacing,
-                               std::make_shared<const sampling::MeshField>(*geometry[i].field)};
+                               std::make_shared<const sampling::MeshField>(*geometry[i].field), nullptr};
+      if (!geometry[i].field->encloses_volume()) {
+        // An open sheet: its samples (one surface layer) ride the posed triangles (control/skinning.h).
+        const sampling::MeshField& field = *geometry[i].field;
+        auto anchors = control::anchor_samples(geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
+                                               [&](std::size_t k) { return field.closest(ct.set.position[k]).triangle; });
+        if (!anchors) return Error{anchors.error().kind, fmt::format("targets[{}]: {}", i, anchors.error().message)};
+        sk.anchors = std::make_shared<const control::SurfaceAnchors>(std::move(*anchors));
+        ct.anchors = sk.anchors;
+      }
       ts.skinned = std::move(sk);
       ct.skin = skin;
       ct.skin_joints = std::move(w.joints);
@@ -112,13 +121,16 @@ control::PosedJoints joints_at(const TargetShapes::Skinned& sk, double time, con
   return joints;
 }
 
-// `bind` points skinned by `joints` with their influences, then moved by `pose` (none: skinned only).
+// `bind` points skinned by `joints` with their influences, then moved by `pose` (none: skinned only). With `anchors`
+// (a sheet's samples), each rides its posed triangle instead.
 std::vector<Vec3f> skin_points(const control::PosedJoints& joints, const std::vector<Vec3f>& bind, const JointIds& ids,
-                               const JointWeights& weights, const control::Pose* pose) {
-  std::vector<Vec3f> x(bind.size());
+                               const JointWeights& weights, const control::Pose* pose,
+                               const control::SurfaceAnchors* anchors = nullptr) {
+  std::vector<Vec3f> x(bind.size()), vertices;
+  if (anchors) anchors->pose_vertices(joints, vertices);
   core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
-    x[i] = joints.apply(ids[i], weights[i], bind[i]);
+    x[i] = anchors ? anchors->place(i, vertices) : joints.apply(ids[i], weights[i], bind[i]);
     if (pose) x[i] = pose->apply(x[i]);
   });
   return x;
@@ -130,13 +142,14 @@ Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const
                                          const control::Pose& pose, double time) {
   const control::PosedJoints joints = joints_at(sk, time, sk.skin->spec.skinning);
   const auto vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
-  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose);
+  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose, sk.anchors.get());
   FF_TRY(sampling::MeshField field, sk.bind_field->moved(vertices));
   return metrics::TargetShape::posed(bind, std::move(field), samples);
 }
 
 std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {
-  return skin_points(joints_at(sk, time, method), sk.bind_samples, sk.sample_joints, sk.sample_weights, nullptr);
+  return skin_points(joints_at(sk, time, method), sk.bind_samples, sk.sample_joints, sk.sample_weights, nullptr,
+                     sk.anchors.get());
 }
 
 Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
@@ -144,7 +157,7 @@ Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk
   io::TriangleMesh mesh;
   mesh.triangles = sk.bind_mesh.triangles;
   mesh.vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
-  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose);
+  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose, sk.anchors.get());
   return metrics::TargetShape::build(mesh, samples, sk.spacing);
 }
 

@@ -32,9 +32,10 @@ struct SkinnedCase {
   /// few far-apart posed vertices, which cuts the corners of every bend, while the samples inside follow the smooth
   /// blend of the bones; measured 86 % (bench/RESULTS.md "Animated characters"), not yet what issue 19 asks (99 %).
   double keep_inside = 0.99;
-  /// A sheet's samples stay within this many d_c of the posed sheet (simple_skin.gltf: 10 vertices, the same
-  /// corner-cutting of a coarse mesh's bend; measured 1.03 d_c).
-  float sheet_tolerance = 0.5f;
+  /// A sheet's samples stay within this many d_c of the posed sheet: they ride its posed triangles
+  /// (control::SurfaceAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
+  /// 1.03 d_c off, where the 10-vertex sheet cuts its bend's corner).
+  float sheet_tolerance = 0.01f;
 };
 
 fs::path character_glb() {
@@ -49,7 +50,7 @@ fs::path character_glb() {
 
 std::vector<SkinnedCase> cases() {
   return {{"character", character_glb(), "walk", Vec3f::Ones()},
-          {"simple_skin", "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf", "0", Vec3f::Ones(), 0.99, 1.1f},
+          {"simple_skin", "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf", "0", Vec3f::Ones()},
           {"anim_test", "/usr/share/assimp/models/X/anim_test.x", "0", Vec3f::Constant(0.1f)},
           {"huesitos", "/usr/share/assimp/models/FBX/huesitos.fbx", "0", Vec3f::Constant(0.01f), 0.85}};
 }
