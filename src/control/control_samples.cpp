@@ -98,7 +98,7 @@ void ControlSamples::flatten() {
 // scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow). u_c is the pose's
 // velocity over the sub-step (forward difference), so a rig that moves drags its fluid along. A skinned target's
 // samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; an
-// open sheet's ride their posed triangles instead (SurfaceAnchors).
+// open sheet's ride their posed triangles instead (MeshAnchors).
 // Their densities stay the bind pose's too (measured: see bench/RESULTS.md "Animated characters").
 void ControlSamples::pose(double time, float dt) {
   std::vector<Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);

@@ -76,7 +76,7 @@ class ControlSamples {
   std::vector<std::array<std::uint16_t, io::kMaxInfluences>> joints_;
   std::vector<std::array<float, io::kMaxInfluences>> weights_;
   std::vector<std::uint8_t> skinned_;  // per flattened sample: its target's current phase is skinned
-  std::vector<std::shared_ptr<const SurfaceAnchors>> anchors_;  // per target, null: posed by the samples' weights
+  std::vector<std::shared_ptr<const MeshAnchors>> anchors_;  // per target, null: posed by the samples' weights
   std::vector<Index> anchor_;          // per flattened sample: its index in its target's anchors (or kInvalidIndex)
   std::vector<std::vector<Vec3f>> now_vertices_, next_vertices_;  // per anchored target, scratch of pose()
   std::vector<PosedJoints> now_joints_, next_joints_;  // per target, scratch of pose()

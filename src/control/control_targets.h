@@ -2,6 +2,7 @@
 // What every controller checks and keeps of its targets: the samples present and weighted, one support H_c for
 // all (they are sampled at one spacing), mesh swaps at increasing times, valid keyframes. Shared by `adaptive`
 // and the baselines so that they accept and reject exactly the same scenes.
+#include "control/mesh_anchors.h"
 #include "control/skinning.h"
 #include "control/strength.h"
 #include "control/target_motion.h"
@@ -29,7 +30,7 @@ struct ControlTarget {
   std::vector<std::array<float, io::kMaxInfluences>> skin_weights;
   /// An open sheet's samples anchored to its triangles (control/skinning.h): posed on the posed triangles instead of
   /// by their own weights. Null: by their weights.
-  std::shared_ptr<const SurfaceAnchors> anchors;
+  std::shared_ptr<const MeshAnchors> anchors;
 };
 
 /// One of a target's sample sets and the time from which it is in use (the first: −∞).
@@ -47,7 +48,7 @@ struct CheckedTargets {
   std::vector<std::shared_ptr<const TargetSkin>> skin;  ///< per target (null: not skinned)
   std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> skin_joints;  ///< per target, per sample
   std::vector<std::vector<std::array<float, io::kMaxInfluences>>> skin_weights;
-  std::vector<std::shared_ptr<const SurfaceAnchors>> anchors;  ///< per target (null: posed by the samples' weights)
+  std::vector<std::shared_ptr<const MeshAnchors>> anchors;  ///< per target (null: posed by the samples' weights)
   bool moving = false;                             ///< any target keyframed or skinned
 };
 

@@ -9,11 +9,11 @@
 #include "core/fields.h"
 #include "core/types.h"
 #include "io/skin.h"
-#include "io/triangle_mesh.h"
 
 #include <Eigen/Geometry>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -25,8 +25,20 @@ namespace ff::control {
 
 enum class SkinningMethod { Linear, DualQuaternion };
 enum class SkinWeightSource { ClosestPoint, Diffusion };
+/// How the samples follow the posed mesh (control/mesh_anchors.h): skinned by their own weights, or anchored to the
+/// posed mesh's vertices (an open sheet's to its triangles, a closed mesh's in it as a cage). Auto: anchored for a
+/// sheet, and for a closed mesh that is coarse (at most kCageMaxVertices vertices, and at least kCageSamplesPerVertex
+/// samples per vertex: huesitos.fbx has 62 and 160; X/anim_test.x 422 and 24, the demo character 3382 and 2.6), where
+/// its bends cut the corners the samples' own weights go round. The vertex bound bounds the cost: a caged sample
+/// is placed from every vertex, every sub-step.
+enum class SampleFollow { Auto, Weights, Mesh };
+inline constexpr std::size_t kCageMaxVertices = 128;
+inline constexpr double kCageSamplesPerVertex = 64.0;
 constexpr std::array<core::Choice<SkinWeightSource>, 2> field_choices(SkinWeightSource) {
   return {{{SkinWeightSource::ClosestPoint, "closest_point"}, {SkinWeightSource::Diffusion, "diffusion"}}};
+}
+constexpr std::array<core::Choice<SampleFollow>, 3> field_choices(SampleFollow) {
+  return {{{SampleFollow::Auto, "auto"}, {SampleFollow::Weights, "weights"}, {SampleFollow::Mesh, "mesh"}}};
 }
 constexpr std::array<core::Choice<SkinningMethod>, 2> field_choices(SkinningMethod) {
   return {{{SkinningMethod::Linear, "linear"}, {SkinningMethod::DualQuaternion, "dual_quaternion"}}};
@@ -40,6 +52,7 @@ struct AnimationSpec {
   double start = 0.0;    ///< s of scene time at which the clip's time 0 plays (before: its first pose). [0, 1e6]
   SkinningMethod skinning = SkinningMethod::Linear;  ///< how the samples are posed: linear blend or dual quaternion
   SkinWeightSource weights = SkinWeightSource::Diffusion;  ///< the samples' weights: closest surface point, or diffused
+  SampleFollow follow = SampleFollow::Auto;  ///< the samples skinned by their weights, or anchored to the posed mesh
   bool active() const { return !clip.empty(); }
   template <class S, class F>
   static void fields(S& s, F&& f) {
@@ -50,6 +63,7 @@ struct AnimationSpec {
     f("start", s.start, closed(0.0, 1e6, "s of scene time at which the clip starts"));
     f("skinning", s.skinning, plain("how the control samples follow the skin"));
     f("weights", s.weights, plain("the control samples' skin weights: of the closest surface point, or diffused inside"));
+    f("follow", s.follow, plain("the control samples skinned by their own weights, or anchored to the posed mesh"));
   }
 };
 
@@ -62,6 +76,7 @@ struct TargetSkin {
 
   /// τ(t): the clip time at scene time t.
   double clip_time(double t) const;
+
   /// K_j(τ(t)) per joint, in the world (T · G_j · inverse_bind_j · T⁻¹).
   void world_joint_matrices(double t, std::vector<io::Mat4f>& out) const;
 };
@@ -83,62 +98,5 @@ class PosedJoints {
   std::vector<Eigen::Matrix3f> stretch_;
 };
 
-
-/// An open sheet's samples ride their bind triangles. Sample i sits at barycentrics `bary[i]` of triangle
-/// `triangle[i]` of the bind mesh, `height[i]` along that triangle's unit normal (the mesh's winding); posed, it sits
-/// at the same barycentrics and height on the posed triangle, whose vertices are skinned by their own weights. So it
-/// stays on the posed sheet exactly. A sample skinned by its own (interpolated) weights does not: linear blend
-/// skinning of a blend of vertices is not the blend of the skinned vertices, and a coarse sheet bends at its
-/// vertices, cutting the corner the samples' smooth blend goes round (glTF2/simple_skin: 96.9 % of the fluid
-/// inside against the posed sheet, bench/RESULTS.md "Animated characters, sixth part"). A volume keeps its
-/// weight-skinned samples (its interior has no triangle to ride; tried, it cost the fluid more).
-struct SurfaceAnchors {
-  io::TriangleMesh mesh;  ///< the bind mesh, world (the target's transform applied)
-  std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vertex_joints;  ///< per vertex of `mesh`
-  std::vector<std::array<float, io::kMaxInfluences>> vertex_weights;
-  // Per sample of the target's first sample set.
-  std::vector<Index> triangle;
-  std::vector<std::array<float, 3>> bary;
-  std::vector<float> height;
-
-  /// Whether the arrays agree: one anchor per sample of `samples`, triangles and vertices in range.
-  bool consistent(std::size_t samples) const;
-  /// The mesh's vertices skinned by `joints` (world, posed; no keyframed pose).
-  void pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const;
-  /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices).
-  Vec3f place(std::size_t i, const std::vector<Vec3f>& posed) const;
-};
-
-/// Anchors for `samples` (world, bind pose) on `mesh`: each sample's closest triangle (`closest_triangle(i)`, an
-/// index into mesh.triangles), its barycentrics there and its height above it. Errors: Param for a triangle out of
-/// range or sizes that disagree.
-template <class ClosestTriangle>
-Result<SurfaceAnchors> anchor_samples(io::TriangleMesh mesh, std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vj,
-                                      std::vector<std::array<float, io::kMaxInfluences>> vw,
-                                      const std::vector<Vec3f>& samples, ClosestTriangle&& closest_triangle);
-
-// The barycentrics of p's projection into triangle (a, b, c), and its height along the unit normal (b−a)×(c−a)
-// (0 for a degenerate triangle: its corner is then taken whole).
-void triangle_anchor(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, std::array<float, 3>& bary,
-                     float& height);
-
-template <class ClosestTriangle>
-Result<SurfaceAnchors> anchor_samples(io::TriangleMesh mesh, std::vector<std::array<std::uint16_t, io::kMaxInfluences>> vj,
-                                      std::vector<std::array<float, io::kMaxInfluences>> vw,
-                                      const std::vector<Vec3f>& samples, ClosestTriangle&& closest_triangle) {
-  SurfaceAnchors a;
-  a.mesh = std::move(mesh), a.vertex_joints = std::move(vj), a.vertex_weights = std::move(vw);
-  a.triangle.resize(samples.size()), a.bary.resize(samples.size()), a.height.resize(samples.size());
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Index t = closest_triangle(i);
-    if (t >= a.mesh.triangles.size()) return param_error("a control sample has no closest triangle on its sheet");
-    const auto& tri = a.mesh.triangles[t];
-    a.triangle[i] = t;
-    triangle_anchor(samples[i], a.mesh.vertices[tri[0]], a.mesh.vertices[tri[1]], a.mesh.vertices[tri[2]], a.bary[i],
-                    a.height[i]);
-  }
-  if (!a.consistent(samples.size())) return param_error("a sheet's skin weights do not match its vertices");
-  return a;
-}
 
 }  // namespace ff::control

@@ -14,6 +14,9 @@ namespace ff::pipeline {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+// At most 64 Mi cage weights (256 MiB) for one target's samples.
+constexpr std::size_t kMaxCageWeights = std::size_t{64} << 20;
+
 sampling::SamplingParams target_sampling(const scene::Scene& scene) {
   sampling::SamplingParams sp = scene.sampling;
   if (!(sp.spacing > 0.0f)) sp.spacing = scene.solver.spacing();
@@ -87,13 +90,24 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
       TargetShapes::Skinned sk{skin, geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
                                w.joints, w.weights, ct.set.spacing,
                                std::make_shared<const sampling::MeshField>(*geometry[i].field), nullptr};
-      if (!geometry[i].field->encloses_volume()) {
-        // An open sheet: its samples (one surface layer) ride the posed triangles (control/skinning.h).
+      // How the samples follow the posed mesh (control/skinning.h SampleFollow, control/mesh_anchors.h).
+      const bool sheet = !geometry[i].field->encloses_volume();
+      const std::size_t nv = geometry[i].mesh.vertices.size();
+      const bool coarse = nv <= control::kCageMaxVertices &&
+                          double(ct.set.size()) >= control::kCageSamplesPerVertex * double(nv);
+      const bool anchored = skin->spec.follow == control::SampleFollow::Mesh ||
+                            (skin->spec.follow == control::SampleFollow::Auto && (sheet || coarse));
+      if (anchored) {
         const sampling::MeshField& field = *geometry[i].field;
-        auto anchors = control::anchor_samples(geometry[i].mesh, skin->skin.joints, skin->skin.weights, ct.set.position,
-                                               [&](std::size_t k) { return field.closest(ct.set.position[k]).triangle; });
+        auto anchors = sheet ? control::anchor_to_triangles(geometry[i].mesh, skin->skin.joints, skin->skin.weights,
+                                                            ct.set.position,
+                                                            [&](std::size_t k) { return field.closest(ct.set.position[k]).triangle; })
+                             : control::anchor_to_cage(geometry[i].mesh, skin->skin.joints, skin->skin.weights,
+                                                       ct.set.position, kMaxCageWeights);
         if (!anchors) return Error{anchors.error().kind, fmt::format("targets[{}]: {}", i, anchors.error().message)};
-        sk.anchors = std::make_shared<const control::SurfaceAnchors>(std::move(*anchors));
+        spdlog::info("target {}: the control samples follow the posed mesh ({})", i,
+                     sheet ? "on its triangles" : fmt::format("in it as a cage of {} vertices", nv));
+        sk.anchors = std::make_shared<const control::MeshAnchors>(std::move(*anchors));
         ct.anchors = sk.anchors;
       }
       ts.skinned = std::move(sk);
@@ -125,7 +139,7 @@ control::PosedJoints joints_at(const TargetShapes::Skinned& sk, double time, con
 // (a sheet's samples), each rides its posed triangle instead.
 std::vector<Vec3f> skin_points(const control::PosedJoints& joints, const std::vector<Vec3f>& bind, const JointIds& ids,
                                const JointWeights& weights, const control::Pose* pose,
-                               const control::SurfaceAnchors* anchors = nullptr) {
+                               const control::MeshAnchors* anchors = nullptr) {
   std::vector<Vec3f> x(bind.size()), vertices;
   if (anchors) anchors->pose_vertices(joints, vertices);
   core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {

@@ -43,7 +43,7 @@ struct TargetShapes {
     std::shared_ptr<const sampling::MeshField> bind_field;
     /// An open sheet's samples ride its triangles (control/skinning.h), as the controllers pose them. Null: the
     /// samples are skinned by sample_joints/sample_weights.
-    std::shared_ptr<const control::SurfaceAnchors> anchors;
+    std::shared_ptr<const control::MeshAnchors> anchors;
   };
   std::optional<Skinned> skinned;
   const metrics::TargetShape& at(double t) const {

@@ -29,11 +29,12 @@ struct SkinnedCase {
   Vec3f scale;
   /// The least share of the samples inside the bind mesh that must stay inside the posed mesh at every time.
   /// huesitos.fbx is a 62-vertex cylinder bent through 9 bones: its posed surface is the linear interpolation of a
-  /// few far-apart posed vertices, which cuts the corners of every bend, while the samples inside follow the smooth
-  /// blend of the bones; measured 86 % (bench/RESULTS.md "Animated characters"), not yet what issue 19 asks (99 %).
+  /// few far-apart posed vertices, which cuts the corners of every bend. Skinned by their own weights its samples
+  /// followed the smooth blend of the bones (86 % stayed inside); held in the mesh as a cage (control/mesh_anchors.h)
+  /// 96.4 % do at worst (t = 0.39 s, where the posed mesh keeps 91 % of its volume), not yet what issue 19 asks (99 %).
   double keep_inside = 0.99;
   /// A sheet's samples stay within this many d_c of the posed sheet: they ride its posed triangles
-  /// (control::SurfaceAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
+  /// (control::MeshAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
   /// 1.03 d_c off, where the 10-vertex sheet cuts its bend's corner).
   float sheet_tolerance = 0.01f;
 };
@@ -52,7 +53,7 @@ std::vector<SkinnedCase> cases() {
   return {{"character", character_glb(), "walk", Vec3f::Ones()},
           {"simple_skin", "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf", "0", Vec3f::Ones()},
           {"anim_test", "/usr/share/assimp/models/X/anim_test.x", "0", Vec3f::Constant(0.1f)},
-          {"huesitos", "/usr/share/assimp/models/FBX/huesitos.fbx", "0", Vec3f::Constant(0.01f), 0.85}};
+          {"huesitos", "/usr/share/assimp/models/FBX/huesitos.fbx", "0", Vec3f::Constant(0.01f), 0.96}};
 }
 
 class Skinned : public ::testing::TestWithParam<SkinnedCase> {};
@@ -92,6 +93,20 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   auto bind_field = sampling::MeshField::build(sk.bind_mesh);
   ASSERT_TRUE(bind_field.has_value());
   const bool sheet = !bind_field->encloses_volume();
+  // How the samples follow (SampleFollow::Auto): anchored to the posed mesh for the sheet and for huesitos' 62-vertex
+  // cage (4017 samples, 65 per vertex); skinned by their own weights for the finer meshes.
+  EXPECT_EQ(sk.anchors != nullptr, c.name == "simple_skin" || c.name == "huesitos") << c.name;
+  if (sk.anchors) {
+    EXPECT_EQ(sk.anchors->caged(), !sheet) << c.name;
+  }
+  // The share of its bind volume the posed mesh keeps at worst, which an automatic fluid is sized to.
+  const double share = posed_volume_share(*sk.skin, sk.bind_mesh);
+  std::printf("%s: the posed mesh keeps %.1f %% of its bind volume at worst\n", c.name.c_str(), 100.0 * share);
+  if (c.name == "huesitos") {
+    EXPECT_NEAR(share, 0.88, 0.02);
+  } else if (!sheet) {
+    EXPECT_GT(share, 0.95) << c.name;
+  }
   std::vector<std::uint8_t> in_bind(sk.bind_samples.size());
   std::size_t n_in = 0;
   for (std::size_t i = 0; i < in_bind.size(); ++i) n_in += in_bind[i] = bind_field->inside(sk.bind_samples[i]);

@@ -1,9 +1,10 @@
-// An open sheet's control samples ride their posed triangles (control/skinning.h, SurfaceAnchors): at the bind pose
-// every sample is placed where it was; posed, it lies on the posed sheet, where skinning it by its interpolated
+// Samples anchored to the posed mesh (control/mesh_anchors.h). An open sheet's ride their posed triangles: at the bind
+// pose every sample is placed where it was; posed, it lies on the posed sheet, where skinning it by its interpolated
 // weights would leave it; and ControlSamples poses anchored samples so, with their velocity the placement's forward
-// difference. The skeleton is the hand-built bar of tests/support/skin_bar.h, its sheet a coarse strip.
+// difference. A closed mesh's sit in it as a cage (mean value coordinates): reproduced exactly at bind, and inside the
+// bent mesh. The skeleton is the hand-built bar of tests/support/skin_bar.h, its sheet a coarse strip.
 #include "control/control_samples.h"
-#include "control/skinning.h"
+#include "control/mesh_anchors.h"
 #include "sampling/mesh_field.h"
 #include "support/skin_bar.h"
 
@@ -58,8 +59,8 @@ Sheet make_sheet(int rings, std::size_t n, float max_height) {
   return s;
 }
 
-Result<SurfaceAnchors> anchors_of(const Sheet& s) {
-  return anchor_samples(s.mesh, s.skin.joints, s.skin.weights, s.samples, [&](std::size_t i) { return s.triangle[i]; });
+Result<MeshAnchors> anchors_of(const Sheet& s) {
+  return anchor_to_triangles(s.mesh, s.skin.joints, s.skin.weights, s.samples, [&](std::size_t i) { return s.triangle[i]; });
 }
 
 PosedJoints bend_at(const io::Skin& skin, double t) {
@@ -78,7 +79,7 @@ float sheet_distance(const io::TriangleMesh& mesh, const std::vector<Vec3f>& v, 
   return best;
 }
 
-TEST(SurfaceAnchors, AtTheBindPoseEverySampleIsPlacedWhereItWas) {
+TEST(MeshAnchors, AtTheBindPoseEverySampleIsPlacedWhereItWas) {
   const Sheet s = make_sheet(5, 500, 0.02f);
   auto a = anchors_of(s);
   ASSERT_TRUE(a.has_value()) << a.error().message;
@@ -93,7 +94,7 @@ TEST(SurfaceAnchors, AtTheBindPoseEverySampleIsPlacedWhereItWas) {
   EXPECT_EQ(height, 0.0f);
 }
 
-TEST(SurfaceAnchors, PosedSamplesLieOnThePosedSheetWhereTheirOwnWeightsWouldLeaveIt) {
+TEST(MeshAnchors, PosedSamplesLieOnThePosedSheetWhereTheirOwnWeightsWouldLeaveIt) {
   const Sheet s = make_sheet(3, 400, 0.0f);
   auto a = anchors_of(s);
   ASSERT_TRUE(a.has_value()) << a.error().message;
@@ -117,7 +118,7 @@ TEST(SurfaceAnchors, PosedSamplesLieOnThePosedSheetWhereTheirOwnWeightsWouldLeav
   EXPECT_GT(weighted, 0.01f);  // what the anchors are for: a coarse sheet's bend leaves weight-skinned samples off it
 }
 
-TEST(SurfaceAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
+TEST(MeshAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   const Sheet s = make_sheet(4, 300, 0.01f);
   auto a = anchors_of(s);
   ASSERT_TRUE(a.has_value()) << a.error().message;
@@ -137,7 +138,7 @@ TEST(SurfaceAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   ct.skin_joints.resize(s.samples.size());
   ct.skin_weights.resize(s.samples.size());
   for (std::size_t i = 0; i < s.samples.size(); ++i) test::bar_influence(s.samples[i].y(), ct.skin_joints[i], ct.skin_weights[i]);
-  ct.anchors = std::make_shared<const SurfaceAnchors>(*a);
+  ct.anchors = std::make_shared<const MeshAnchors>(*a);
   std::vector<ControlTarget> targets;
   targets.push_back(ct);
   ControlSamples cs;
@@ -160,12 +161,62 @@ TEST(SurfaceAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   EXPECT_LT(worst_v, 1e-3f * speed);
   EXPECT_GT(speed, 0.1f);  // the bend moves the samples
   // Anchors that do not match the samples are refused, naming the target.
-  auto short_anchors = std::make_shared<SurfaceAnchors>(*a);
+  auto short_anchors = std::make_shared<MeshAnchors>(*a);
   short_anchors->triangle.pop_back();
   targets[0].anchors = short_anchors;
   const Status refused = ControlSamples{}.init(targets, "test", SampleOptions{});
   ASSERT_FALSE(refused.ok());
-  EXPECT_NE(refused.error().message.find("targets[0]: surface anchors for"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("targets[0]: mesh anchors for"), std::string::npos) << refused.error().message;
+}
+
+TEST(MeshAnchors, ACageReproducesItsSamplesAndKeepsThemInsideTheBentMesh) {
+  // The bar, coarse (3 rings of 6): bent 90° at its middle, its posed surface cuts the bend's corner.
+  const io::TriangleMesh bar = test::bar_mesh(3, 6);
+  const io::Skin skin = test::bar_skin(bar);
+  auto field = sampling::MeshField::build(bar);
+  ASSERT_TRUE(field.has_value());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), y(0.0f, 1.0f);
+  std::vector<Vec3f> samples;
+  while (samples.size() < 2000) {
+    const Vec3f x(test::kBarX + test::kBarRadius * u(rng), test::kBarHeight * y(rng), test::kBarRadius * u(rng));
+    if (field->signed_distance(x) < -0.005f) samples.push_back(x);
+  }
+  auto cage = anchor_to_cage(bar, skin.joints, skin.weights, samples, std::size_t{1} << 24);
+  ASSERT_TRUE(cage.has_value()) << cage.error().message;
+  ASSERT_TRUE(cage->caged());
+  float worst = 0.0f, worst_sum = 0.0f;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    worst = std::max(worst, (cage->place(i, bar.vertices) - samples[i]).norm());
+    float sum = 0.0f;
+    for (std::size_t v = 0; v < bar.vertices.size(); ++v) sum += cage->cage[i * bar.vertices.size() + v];
+    worst_sum = std::max(worst_sum, std::abs(sum - 1.0f));
+  }
+  EXPECT_LT(worst, 1e-5f);
+  EXPECT_LT(worst_sum, 1e-5f);
+  const PosedJoints joints = bend_at(skin, 1.0);
+  std::vector<Vec3f> posed;
+  cage->pose_vertices(joints, posed);
+  io::TriangleMesh bent = bar;
+  bent.vertices = posed;
+  auto bent_field = sampling::MeshField::build(bent);
+  ASSERT_TRUE(bent_field.has_value());
+  std::size_t caged_in = 0, weighted_in = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    caged_in += bent_field->inside(cage->place(i, posed));
+    std::array<std::uint16_t, io::kMaxInfluences> j;
+    std::array<float, io::kMaxInfluences> w;
+    test::bar_influence(samples[i].y(), j, w);
+    weighted_in += bent_field->inside(joints.apply(j, w, samples[i]));
+  }
+  const double caged = double(caged_in) / double(samples.size()), weighted = double(weighted_in) / double(samples.size());
+  std::printf("bent coarse bar: %.2f %% of caged samples inside, %.2f %% of weight-skinned ones\n", 100 * caged, 100 * weighted);
+  EXPECT_GE(caged, 0.99);
+  EXPECT_GT(caged, weighted);
+  // Weights that would exceed the limit are refused before they are allocated, naming the knob.
+  auto big = anchor_to_cage(bar, skin.joints, skin.weights, samples, 1000);
+  ASSERT_FALSE(big.has_value());
+  EXPECT_NE(big.error().message.find("\"follow\": \"weights\""), std::string::npos) << big.error().message;
 }
 
 }  // namespace
