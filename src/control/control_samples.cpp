@@ -97,8 +97,8 @@ void ControlSamples::flatten() {
 // Samples of moving targets follow their pose; densities keep their rest values (rigid motion keeps them exactly; a
 // scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow). u_c is the pose's
 // velocity over the sub-step (forward difference), so a rig that moves drags its fluid along. A skinned target's
-// samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; an
-// open sheet's ride their posed triangles instead (MeshAnchors).
+// samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; those
+// anchored to the posed mesh (control/mesh_anchors.h) are placed from its skinned vertices instead.
 // Their densities stay the bind pose's too (measured: see bench/RESULTS.md "Animated characters").
 void ControlSamples::pose(double time, float dt) {
   std::vector<Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);
@@ -118,7 +118,7 @@ void ControlSamples::pose(double time, float dt) {
       if (anchors_[t]) anchors_[t]->pose_vertices(next_joints_[t], next_vertices_[t]);
     }
   }
-  // Where a sample is (world, no keyframed pose): on its posed triangle, or skinned by its own weights.
+  // Where a sample is (world, no keyframed pose): placed from the posed mesh, or skinned by its own weights.
   const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices) {
     const Index a = anchor_[i];
     return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices)

@@ -39,7 +39,7 @@ Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targe
                                            targets[t].skin_joints[i][k], sk->skin.joint_nodes.size()));
       if (const auto& a = targets[t].anchors) {
         if (!a->consistent(n))
-          return param_error(fmt::format("targets[{}]: mesh anchors for {} of {} control samples", t, a->triangle.size(), n));
+          return param_error(fmt::format("targets[{}]: mesh anchors that do not match its {} control samples", t, n));
         for (std::size_t v = 0; v < a->mesh.vertices.size(); ++v)
           for (int k = 0; k < io::kMaxInfluences; ++k)
             if (a->vertex_weights[v][k] != 0.0f && a->vertex_joints[v][k] >= sk->skin.joint_nodes.size())

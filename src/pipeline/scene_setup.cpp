@@ -94,7 +94,8 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
       const bool sheet = !geometry[i].field->encloses_volume();
       const std::size_t nv = geometry[i].mesh.vertices.size();
       const bool coarse = nv <= control::kCageMaxVertices &&
-                          double(ct.set.size()) >= control::kCageSamplesPerVertex * double(nv);
+                          double(ct.set.size()) >= control::kCageSamplesPerVertex * double(nv) &&
+                          ct.set.size() <= kMaxCageWeights / std::max<std::size_t>(1, nv);
       const bool anchored = skin->spec.follow == control::SampleFollow::Mesh ||
                             (skin->spec.follow == control::SampleFollow::Auto && (sheet || coarse));
       if (anchored) {
@@ -136,7 +137,7 @@ control::PosedJoints joints_at(const TargetShapes::Skinned& sk, double time, con
 }
 
 // `bind` points skinned by `joints` with their influences, then moved by `pose` (none: skinned only). With `anchors`
-// (a sheet's samples), each rides its posed triangle instead.
+// (control/mesh_anchors.h), each is placed from the skinned mesh instead.
 std::vector<Vec3f> skin_points(const control::PosedJoints& joints, const std::vector<Vec3f>& bind, const JointIds& ids,
                                const JointWeights& weights, const control::Pose* pose,
                                const control::MeshAnchors* anchors = nullptr) {

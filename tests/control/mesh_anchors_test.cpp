@@ -166,7 +166,7 @@ TEST(MeshAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   targets[0].anchors = short_anchors;
   const Status refused = ControlSamples{}.init(targets, "test", SampleOptions{});
   ASSERT_FALSE(refused.ok());
-  EXPECT_NE(refused.error().message.find("targets[0]: mesh anchors for"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("targets[0]: mesh anchors that do not match"), std::string::npos) << refused.error().message;
 }
 
 TEST(MeshAnchors, ACageReproducesItsSamplesAndKeepsThemInsideTheBentMesh) {
