@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <optional>
+#include <string>
 
 namespace ff::control {
 
@@ -32,19 +34,20 @@ Result<CheckedTargets> validate_control_targets(std::vector<ControlTarget> targe
       if (targets[t].skin_joints.size() != n || targets[t].skin_weights.size() != n)
         return param_error(fmt::format("targets[{}]: skin weights for {} of {} control samples", t,
                                        targets[t].skin_joints.size(), n));
-      for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < io::kMaxInfluences; ++k)
-          if (targets[t].skin_weights[i][k] != 0.0f && targets[t].skin_joints[i][k] >= sk->skin.joint_nodes.size())
-            return param_error(fmt::format("targets[{}]: control sample {} names joint {} of {}", t, i,
-                                           targets[t].skin_joints[i][k], sk->skin.joint_nodes.size()));
+      // The first influence of `joints`/`weights` that names a joint the skin does not have, as a message.
+      const std::size_t nj = sk->skin.joint_nodes.size();
+      const auto bad_joint = [&](const auto& joints, const auto& weights, const char* what) -> std::optional<std::string> {
+        for (std::size_t i = 0; i < joints.size(); ++i)
+          for (int k = 0; k < io::kMaxInfluences; ++k)
+            if (weights[i][k] != 0.0f && joints[i][k] >= nj)
+              return fmt::format("targets[{}]: {} {} names joint {} of {}", t, what, i, joints[i][k], nj);
+        return std::nullopt;
+      };
+      if (auto bad = bad_joint(targets[t].skin_joints, targets[t].skin_weights, "control sample")) return param_error(*bad);
       if (const auto& a = targets[t].anchors) {
         if (!a->consistent(n))
           return param_error(fmt::format("targets[{}]: mesh anchors that do not match its {} control samples", t, n));
-        for (std::size_t v = 0; v < a->mesh.vertices.size(); ++v)
-          for (int k = 0; k < io::kMaxInfluences; ++k)
-            if (a->vertex_weights[v][k] != 0.0f && a->vertex_joints[v][k] >= sk->skin.joint_nodes.size())
-              return param_error(fmt::format("targets[{}]: vertex {} names joint {} of {}", t, v,
-                                             a->vertex_joints[v][k], sk->skin.joint_nodes.size()));
+        if (auto bad = bad_joint(a->vertex_joints, a->vertex_weights, "vertex")) return param_error(*bad);
       }
       c.moving = true;
     } else if (targets[t].anchors) {

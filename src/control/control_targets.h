@@ -28,8 +28,8 @@ struct ControlTarget {
   std::shared_ptr<const TargetSkin> skin;
   std::vector<std::array<std::uint16_t, io::kMaxInfluences>> skin_joints;
   std::vector<std::array<float, io::kMaxInfluences>> skin_weights;
-  /// An open sheet's samples anchored to its triangles (control/skinning.h): posed on the posed triangles instead of
-  /// by their own weights. Null: by their weights.
+  /// The samples anchored to the posed mesh (control/mesh_anchors.h: a sheet's to its triangles, a coarse closed
+  /// mesh's in it as a cage), placed from its skinned vertices instead of by their own weights. Null: by their weights.
   std::shared_ptr<const MeshAnchors> anchors;
 };
 

@@ -76,7 +76,6 @@ struct TargetSkin {
 
   /// τ(t): the clip time at scene time t.
   double clip_time(double t) const;
-
   /// K_j(τ(t)) per joint, in the world (T · G_j · inverse_bind_j · T⁻¹).
   void world_joint_matrices(double t, std::vector<io::Mat4f>& out) const;
 };
@@ -97,6 +96,5 @@ class PosedJoints {
   std::vector<Eigen::Quaternionf> q0_, qe_;
   std::vector<Eigen::Matrix3f> stretch_;
 };
-
 
 }  // namespace ff::control

@@ -136,44 +136,59 @@ control::PosedJoints joints_at(const TargetShapes::Skinned& sk, double time, con
   return joints;
 }
 
-// `bind` points skinned by `joints` with their influences, then moved by `pose` (none: skinned only). With `anchors`
-// (control/mesh_anchors.h), each is placed from the skinned mesh instead.
+// `bind` points skinned by `joints` with their influences.
 std::vector<Vec3f> skin_points(const control::PosedJoints& joints, const std::vector<Vec3f>& bind, const JointIds& ids,
-                               const JointWeights& weights, const control::Pose* pose,
-                               const control::MeshAnchors* anchors = nullptr) {
-  std::vector<Vec3f> x(bind.size()), vertices;
-  if (anchors) anchors->pose_vertices(joints, vertices);
-  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    x[i] = anchors ? anchors->place(i, vertices) : joints.apply(ids[i], weights[i], bind[i]);
-    if (pose) x[i] = pose->apply(x[i]);
+                               const JointWeights& weights) {
+  std::vector<Vec3f> x(bind.size());
+  core::parallel_for(static_cast<std::int64_t>(x.size()), [&](std::int64_t i) {
+    const auto k = static_cast<std::size_t>(i);
+    x[k] = joints.apply(ids[k], weights[k], bind[k]);
   });
   return x;
+}
+
+// The bind mesh's vertices and the samples skinned by `joints`, then moved by `pose` (none: skinned only). Samples
+// anchored to the mesh (control/mesh_anchors.h) are placed from the skinned vertices: the very ones the posed mesh has.
+struct SkinnedPose {
+  std::vector<Vec3f> vertices, samples;
+};
+
+SkinnedPose skin_pose(const TargetShapes::Skinned& sk, const control::PosedJoints& joints, const control::Pose* pose) {
+  SkinnedPose out;
+  out.vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights);
+  if (sk.anchors) {
+    out.samples.resize(sk.bind_samples.size());
+    core::parallel_for(static_cast<std::int64_t>(out.samples.size()), [&](std::int64_t i) {
+      out.samples[static_cast<std::size_t>(i)] = sk.anchors->place(static_cast<std::size_t>(i), out.vertices);
+    });
+  } else {
+    out.samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights);
+  }
+  if (pose)
+    for (auto* points : {&out.vertices, &out.samples})
+      for (Vec3f& x : *points) x = pose->apply(x);
+  return out;
 }
 
 }  // namespace
 
 Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& sk,
                                          const control::Pose& pose, double time) {
-  const control::PosedJoints joints = joints_at(sk, time, sk.skin->spec.skinning);
-  const auto vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
-  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose, sk.anchors.get());
-  FF_TRY(sampling::MeshField field, sk.bind_field->moved(vertices));
-  return metrics::TargetShape::posed(bind, std::move(field), samples);
+  SkinnedPose posed = skin_pose(sk, joints_at(sk, time, sk.skin->spec.skinning), &pose);
+  FF_TRY(sampling::MeshField field, sk.bind_field->moved(posed.vertices));
+  return metrics::TargetShape::posed(bind, std::move(field), posed.samples);
 }
 
 std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& sk, double time, control::SkinningMethod method) {
-  return skin_points(joints_at(sk, time, method), sk.bind_samples, sk.sample_joints, sk.sample_weights, nullptr,
-                     sk.anchors.get());
+  return skin_pose(sk, joints_at(sk, time, method), nullptr).samples;
 }
 
 Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& sk, const control::Pose& pose, double time) {
-  const control::PosedJoints joints = joints_at(sk, time, sk.skin->spec.skinning);
+  SkinnedPose posed = skin_pose(sk, joints_at(sk, time, sk.skin->spec.skinning), &pose);
   io::TriangleMesh mesh;
   mesh.triangles = sk.bind_mesh.triangles;
-  mesh.vertices = skin_points(joints, sk.bind_mesh.vertices, sk.mesh_joints, sk.mesh_weights, &pose);
-  const auto samples = skin_points(joints, sk.bind_samples, sk.sample_joints, sk.sample_weights, &pose, sk.anchors.get());
-  return metrics::TargetShape::build(mesh, samples, sk.spacing);
+  mesh.vertices = std::move(posed.vertices);
+  return metrics::TargetShape::build(mesh, posed.samples, sk.spacing);
 }
 
 ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,

@@ -41,7 +41,7 @@ struct TargetShapes {
     float spacing = 0.0f;
     /// The bind mesh's field, which posed_shape moves to each pose (MeshField::moved).
     std::shared_ptr<const sampling::MeshField> bind_field;
-    /// An open sheet's samples ride its triangles (control/skinning.h), as the controllers pose them. Null: the
+    /// The samples anchored to the posed mesh (control/mesh_anchors.h), as the controllers pose them. Null: the
     /// samples are skinned by sample_joints/sample_weights.
     std::shared_ptr<const control::MeshAnchors> anchors;
   };
