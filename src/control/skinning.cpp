@@ -1,6 +1,5 @@
 #include "control/skinning.h"
 
-
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
@@ -14,11 +13,17 @@ double TargetSkin::clip_time(double t) const {
   const double tau = std::max(0.0, spec.speed * (t - spec.start));
   if (!(duration > 0.0)) return 0.0;
   if (!spec.loop) return std::min(tau, duration);
-  return std::fmod(tau, duration);
+  if (!pingpong) return std::fmod(tau, duration);
+  const double phase = std::fmod(tau, 2.0 * duration);
+  return phase <= duration ? phase : 2.0 * duration - phase;
 }
 
 void TargetSkin::world_joint_matrices(double t, std::vector<io::Mat4f>& out) const {
-  skin.joint_matrices(clip, clip_time(t), out);
+  clip_joint_matrices(clip_time(t), out);
+}
+
+void TargetSkin::clip_joint_matrices(double tau, std::vector<io::Mat4f>& out) const {
+  skin.joint_matrices(clip, tau, out);
   const io::Mat4f inv = transform.inverse();
   for (auto& k : out) k = transform * k * inv;
 }

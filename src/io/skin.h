@@ -79,6 +79,10 @@ struct Skin {
   void joint_matrices(int clip, double t, std::vector<Mat4f>& out) const;
 };
 
+/// `clip` played forwards and then backwards, as one clip of twice its duration named "NAME pingpong": each key at
+/// time t is kept and mirrored to 2·duration − t. Looping it never jumps, as control::ClipWrap::PingPong plays.
+AnimationClip pingpong_clip(const AnimationClip& clip);
+
 /// T of a MeshTransform as a matrix: x' = R · (scale ⊙ x) + translate.
 Mat4f transform_matrix(const MeshTransform& t);
 

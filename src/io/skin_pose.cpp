@@ -57,6 +57,32 @@ Mat4f transform_matrix(const MeshTransform& t) {
   return m.cast<float>();
 }
 
+namespace {
+// Keys (times, values) followed by their mirror images about the clip's end; a key at the end is not doubled.
+template <class T>
+void mirror_keys(std::vector<double>& times, std::vector<T>& values, double duration) {
+  if (times.empty() || times.size() != values.size()) return;
+  for (std::size_t k = times.size(); k-- > 0;) {
+    const double t = 2.0 * duration - times[k];
+    if (t <= times.back()) continue;
+    times.push_back(t);
+    values.push_back(values[k]);
+  }
+}
+}  // namespace
+
+AnimationClip pingpong_clip(const AnimationClip& clip) {
+  AnimationClip out = clip;
+  out.name = clip.name + " pingpong";
+  out.duration = 2.0 * clip.duration;
+  for (NodeChannel& ch : out.channels) {
+    mirror_keys(ch.translation_times, ch.translations, clip.duration);
+    mirror_keys(ch.rotation_times, ch.rotations, clip.duration);
+    mirror_keys(ch.scale_times, ch.scales, clip.duration);
+  }
+  return out;
+}
+
 Mat4f SkinNode::local() const { return trs(translation, rotation, scale); }
 
 Result<std::size_t> Skin::find_clip(const std::string& name) const {

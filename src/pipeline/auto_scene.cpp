@@ -33,8 +33,16 @@ Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene:
   skin->spec = spec.animation;
   for (const auto& w : skin->skin.warnings) spdlog::warn("target {}: {}", i, w);
   const auto& c = skin->skin.clips[*clip];
+  const double seam = spec.animation.loop ? clip_seam(*skin, mesh) : 0.0;
+  skin->pingpong = spec.animation.loop && (spec.animation.wrap == control::ClipWrap::PingPong ||
+                                           (spec.animation.wrap == control::ClipWrap::Auto && seam > control::kClipSeamTolerance));
   spdlog::info("target {}: skinned, {} joints, clip '{}' ({:.3g} s, {} channels{})", i, skin->skin.joint_nodes.size(),
-               c.name, c.duration, c.channels.size(), spec.animation.loop ? ", looped" : "");
+               c.name, c.duration, c.channels.size(),
+               !spec.animation.loop ? "" : skin->pingpong ? ", played back and forth" : ", looped");
+  if (skin->pingpong && spec.animation.wrap == control::ClipWrap::Auto)
+    spdlog::info("target {}: clip '{}' ends {:.0f} % of the mesh's size away from where it starts, a jump the liquid "
+                 "cannot follow: it plays backwards to its start, then forwards again (\"wrap\": \"repeat\" jumps)",
+                 i, c.name, 100.0 * seam);
   return std::shared_ptr<const control::TargetSkin>(std::move(skin));
 }
 
@@ -61,6 +69,25 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
     out.push_back(std::move(g));
   }
   return out;
+}
+
+double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh) {
+  if (skin.clip < 0 || static_cast<std::size_t>(skin.clip) >= skin.skin.clips.size() || mesh.vertices.empty()) return 0.0;
+  const double duration = skin.skin.clips[static_cast<std::size_t>(skin.clip)].duration;
+  std::vector<io::Mat4f> first, last;
+  skin.clip_joint_matrices(0.0, first);
+  skin.clip_joint_matrices(duration, last);
+  Eigen::AlignedBox3f box;
+  double jump = 0.0;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3f& x = mesh.vertices[v];
+    box.extend(x);
+    const Vec3f a = io::skin_point(first, skin.skin.joints[v], skin.skin.weights[v], x);
+    const Vec3f b = io::skin_point(last, skin.skin.joints[v], skin.skin.weights[v], x);
+    jump = std::max(jump, static_cast<double>((a - b).norm()));
+  }
+  const double size = box.diagonal().norm();
+  return size > 0.0 && std::isfinite(jump) ? jump / size : 0.0;
 }
 
 double posed_volume_share(const control::TargetSkin& skin, const io::TriangleMesh& mesh, int samples) {

@@ -41,6 +41,11 @@ Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene:
 /// when no pose loses volume, or for a mesh without volume). huesitos.fbx: 0.88.
 double posed_volume_share(const control::TargetSkin& skin, const io::TriangleMesh& mesh, int samples = 64);
 
+/// How far `skin`'s clip ends from where it starts: the largest distance between a vertex of `mesh` (world, bind pose)
+/// posed at the clip's first and at its last key time, over the bind mesh's box diagonal (0 for a clip that cycles;
+/// huesitos.fbx 0.79, X/anim_test.x 0.16). ClipWrap::Auto plays a clip back and forth above kClipSeamTolerance.
+double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh);
+
 /// Loads every target with its transform (and the skin of an animated one). Errors name the target.
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);
 

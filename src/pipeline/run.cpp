@@ -413,10 +413,14 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
   const control::TargetSkin& skin = *target.skin;
   FF_TRY(SkinnedSurface rigged,
          transfer_skin(*formed, target.mesh, skin.skin, scene.targets[0].transform, skin.clip, skin.clip_time(time)));
-  FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, skin.skin,
+  // A clip the fluid played back and forth (control::ClipWrap) is also written baked that way, so that looping it in
+  // three.js, Blender or Unity plays what the liquid did.
+  io::Skin clips = skin.skin;
+  if (skin.pingpong) clips.clips.push_back(io::pingpong_clip(skin.skin.clips[static_cast<std::size_t>(skin.clip)]));
+  FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, clips,
                                 scene.targets[0].transform, scene.targets[0].tint));
   spdlog::info("rigged.glb: the final mesh in bind pose with {} joints and {} clip(s) ({} vertices by the fallback, "
-               "round trip within {:.2g} m)", skin.skin.joint_nodes.size(), skin.skin.clips.size(), rigged.unreached,
+               "round trip within {:.2g} m)", clips.joint_nodes.size(), clips.clips.size(), rigged.unreached,
                rigged.max_bind_error_m);
   sum.rigged = true;
   return {};

@@ -483,19 +483,24 @@ TEST(Cli, ASkinnedTargetRunWritesARiggedGlbThatPlaysTheFormedShape) {
   ASSERT_TRUE(fs::exists(out / "rigged.glb")) << r.err;
   const json report = json::parse(e2e::read_file(out / "report.json"));
   const double radius = report["scene"]["solver"]["particle_radius"].get<double>(), spacing = 2.0 * radius;
-  // Formed by ~3 s; frames 204, 219, 234 (t = 3.4, 3.65, 3.9 s) play the looping 1 s clip at speed 0.5 in its second
-  // round: clip times 0.7, 0.825, 0.95 s.
+  // The 1 s clip ends 16.5 % of the cylinder's size from where it starts, so the run played it back and forth
+  // (animation.wrap auto), and rigged.glb carries that as its second clip, "cylinder_test pingpong" (2 s). Formed by
+  // ~3 s; frames 204, 219, 234 (t = 3.4, 3.65, 3.9 s) at speed 0.5 are in the clip's second, backwards play: times
+  // 1.7, 1.825, 1.95 s of the baked clip, 0.3, 0.175, 0.05 s of the file's.
   const std::vector<int> frames{204, 219, 234};
-  const auto tau = [](int f) { return std::fmod(0.5 * f / 60.0, 1.0); };
+  const auto tau = [](int f) { return std::fmod(0.5 * f / 60.0, 2.0); };
   const std::string times = fmt::format("{},{},{}", tau(frames[0]), tau(frames[1]), tau(frames[2]));
   if (test::shell("node --version").first != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
   const auto [rc, o] = test::shell("node '" + (test::source_dir() / "scripts" / "check_rigged_glb.mjs").string() + "' '" +
-                                   (out / "rigged.glb").string() + "' --clip 0 --times " + times);
+                                   (out / "rigged.glb").string() + "' --clip 1 --times " + times);
   ASSERT_EQ(rc, 0) << o;
   const json j = json::parse(o.substr(o.rfind("\n{") == std::string::npos ? 0 : o.rfind("\n{") + 1), nullptr, false);
   ASSERT_FALSE(j.is_discarded()) << o;
   EXPECT_EQ(j["errors"], 0) << o;
   EXPECT_EQ(j["three"]["skinned_meshes"], 1) << o;
+  ASSERT_EQ(j["three"]["clips"].size(), 2u) << o;
+  EXPECT_EQ(j["three"]["clips"][1]["name"], "cylinder_test pingpong") << o;
+  EXPECT_EQ(j["three"]["clips"][1]["duration"], 2) << o;
   ASSERT_EQ(j["three"]["poses"].size(), frames.size()) << o;
   for (std::size_t k = 0; k < frames.size(); ++k) {
     // The fluid's surface lies about r beyond its particles' centres.

@@ -99,6 +99,18 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   if (sk.anchors) {
     EXPECT_EQ(sk.anchors->caged(), !sheet) << c.name;
   }
+  // How far the clip ends from where it starts, and so whether it loops back and forth (ClipWrap::Auto): huesitos'
+  // and anim_test's clips end 79 % and 16 % of their size away; the walk and simple_skin's bend cycle.
+  const double seam = clip_seam(*sk.skin, sk.bind_mesh);
+  std::printf("%s: the clip ends %.4f of the mesh's size from where it starts\n", c.name.c_str(), seam);
+  if (c.name == "huesitos") {
+    EXPECT_NEAR(seam, 0.786, 0.01);
+  } else if (c.name == "anim_test") {
+    EXPECT_NEAR(seam, 0.165, 0.01);
+  } else {
+    EXPECT_LT(seam, 1e-4) << c.name;
+  }
+  EXPECT_EQ(sk.skin->pingpong, seam > control::kClipSeamTolerance) << c.name;
   // The share of its bind volume the posed mesh keeps at worst, which an automatic fluid is sized to.
   const double share = posed_volume_share(*sk.skin, sk.bind_mesh);
   std::printf("%s: the posed mesh keeps %.1f %% of its bind volume at worst\n", c.name.c_str(), 100.0 * share);

@@ -1,0 +1,75 @@
+// How a looped clip starts over (control::ClipWrap): repeated, it jumps back to its first pose; played back and forth
+// (pingpong), its clip time runs forwards and backwards and never jumps; io::pingpong_clip bakes that into one clip of
+// twice the duration, which rigged.glb carries. The skeleton is the hand-built bar of tests/support/skin_bar.h: its
+// "bend" clip ends far from where it starts (the root slid 0.2 m, the upper half turned 90°).
+#include "control/skinning.h"
+#include "io/skin.h"
+#include "support/skin_bar.h"
+
+#include <gtest/gtest.h>
+
+namespace ff::control {
+namespace {
+
+TargetSkin bend_skin(bool loop, bool pingpong) {
+  TargetSkin s;
+  s.skin = test::bar_skin(test::bar_mesh(4, 8));
+  s.clip = 0;  // "bend", 1 s
+  s.spec.clip = "bend";
+  s.spec.loop = loop;
+  s.spec.speed = 2.0;
+  s.spec.start = 0.5;
+  s.pingpong = pingpong;
+  return s;
+}
+
+TEST(ClipWrap, ClipTimeRepeatsHoldsOrRunsBackAndForth) {
+  const TargetSkin repeat = bend_skin(true, false), hold = bend_skin(false, false), pingpong = bend_skin(true, true);
+  // τ = 2 (t − 0.5): before the start, the first pose.
+  for (const TargetSkin* s : {&repeat, &hold, &pingpong}) EXPECT_DOUBLE_EQ(s->clip_time(0.2), 0.0);
+  // t = 0.6, 1.1, 1.4, 1.9, 2.6 → τ unwrapped 0.2, 1.2, 1.8, 2.8, 4.2
+  const double t[] = {0.6, 1.1, 1.4, 1.9, 2.6};
+  const double want_repeat[] = {0.2, 0.2, 0.8, 0.8, 0.2};
+  const double want_hold[] = {0.2, 1.0, 1.0, 1.0, 1.0};
+  const double want_pingpong[] = {0.2, 0.8, 0.2, 0.8, 0.2};
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_NEAR(repeat.clip_time(t[k]), want_repeat[k], 1e-12) << t[k];
+    EXPECT_NEAR(hold.clip_time(t[k]), want_hold[k], 1e-12) << t[k];
+    EXPECT_NEAR(pingpong.clip_time(t[k]), want_pingpong[k], 1e-12) << t[k];
+  }
+  // Through the wraps (τ = 1, 2, 3, …), played back and forth the clip time moves by the same small step each frame;
+  // repeated it jumps by the whole clip.
+  double worst_pingpong = 0.0, worst_repeat = 0.0;
+  const double dt = 1.0 / 600.0;
+  for (double time = 0.5; time < 3.0; time += dt) {
+    worst_pingpong = std::max(worst_pingpong, std::abs(pingpong.clip_time(time + dt) - pingpong.clip_time(time)));
+    worst_repeat = std::max(worst_repeat, std::abs(repeat.clip_time(time + dt) - repeat.clip_time(time)));
+  }
+  EXPECT_LE(worst_pingpong, 2.0 * dt + 1e-9);
+  EXPECT_GT(worst_repeat, 0.9);
+}
+
+TEST(ClipWrap, APingpongClipPlaysTheClipThenItsMirror) {
+  const io::Skin skin = test::bar_skin(test::bar_mesh(4, 8));
+  for (int c = 0; c < 2; ++c) {
+    const io::AnimationClip& clip = skin.clips[static_cast<std::size_t>(c)];
+    io::Skin baked = skin;
+    baked.clips.push_back(io::pingpong_clip(clip));
+    const int p = static_cast<int>(baked.clips.size()) - 1;
+    EXPECT_EQ(baked.clips.back().name, clip.name + " pingpong");
+    EXPECT_DOUBLE_EQ(baked.clips.back().duration, 2.0 * clip.duration);
+    for (const io::NodeChannel& ch : baked.clips.back().channels)
+      for (const auto* times : {&ch.translation_times, &ch.rotation_times, &ch.scale_times})
+        for (std::size_t k = 1; k < times->size(); ++k) EXPECT_LT((*times)[k - 1], (*times)[k]) << clip.name;
+    std::vector<io::Mat4f> a, b;
+    for (int k = 0; k <= 40; ++k) {
+      const double s = 2.0 * clip.duration * k / 40.0;
+      baked.global_matrices(p, s, a);
+      skin.global_matrices(c, s <= clip.duration ? s : 2.0 * clip.duration - s, b);
+      for (std::size_t n = 0; n < a.size(); ++n) EXPECT_TRUE(a[n].isApprox(b[n], 1e-5f)) << clip.name << " at " << s;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ff::control
