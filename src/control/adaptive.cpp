@@ -349,7 +349,8 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
   }
   const float speed = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
   // On a moving target the seed moves too: the steering velocity adds the seed's pose velocity (see follow), so fluid
-  // shed by a fast limb catches up with it instead of chasing where it was.
+  // shed by a fast limb catches up with it instead of chasing where it was, and closes in at least at a share of that
+  // speed (gather_chase): at gather_speed alone it never caught a limb swinging ten times faster.
   const bool chase = samples_.moving() && params_.follow > 0.0f;
   const Vec3f g = ctx_.gravity;
   const Vec3f* x = p.position.data();
@@ -365,8 +366,13 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     const Vec3f to = samples_.position[s] - x[j];
     const float len = to.norm();
     if (len <= 0.0f) return;
-    Vec3f v_des = (speed / len) * to;
-    if (chase) v_des += samples_.velocity[s];
+    Vec3f v_des;
+    if (chase) {  // closing in at least at a share of the seed's own speed, on top of following it
+      const Vec3f& u = samples_.velocity[s];
+      v_des = (std::max(speed, params_.gather_chase * u.norm()) / len) * to + u;
+    } else {
+      v_des = (speed / len) * to;
+    }
     const Vec3f da = -g + inv_tau * (v_des - v[j]);
     a[j] += softened_ ? strength_[t] * da : da;
   });
