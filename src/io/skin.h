@@ -79,7 +79,8 @@ struct Skin {
   void joint_matrices(int clip, double t, std::vector<Mat4f>& out) const;
 };
 
-/// `clip` played forwards and then backwards, as one clip of twice its duration named "NAME pingpong": each key at
+/// `clip` played forwards and then backwards, as one clip of twice its duration named "NAME pingpong" ("clip
+/// pingpong" for a clip without a name): each key at
 /// time t is kept and mirrored to 2·duration − t. Looping it never jumps, as control::ClipWrap::PingPong plays.
 AnimationClip pingpong_clip(const AnimationClip& clip);
 

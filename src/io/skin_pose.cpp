@@ -73,7 +73,7 @@ void mirror_keys(std::vector<double>& times, std::vector<T>& values, double dura
 
 AnimationClip pingpong_clip(const AnimationClip& clip) {
   AnimationClip out = clip;
-  out.name = clip.name + " pingpong";
+  out.name = (clip.name.empty() ? std::string("clip") : clip.name) + " pingpong";
   out.duration = 2.0 * clip.duration;
   for (NodeChannel& ch : out.channels) {
     mirror_keys(ch.translation_times, ch.translations, clip.duration);
