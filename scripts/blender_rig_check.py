@@ -54,10 +54,13 @@ def check(path, clip, times):
     arm = next(md.object for md in skinned[0].modifiers if md.type == "ARMATURE")
     # The clip: the action named as it (the importer may append the armature's name), made the armature's active
     # action, with any NLA strips muted so that only it plays.
+    # An exact name wins over the importer's suffixed one, which wins over a bare prefix: rigged.glb may hold both
+    # "NAME" and "NAME pingpong" (the clip baked back and forth), and a bare prefix matches both.
     action = None
-    for a in bpy.data.actions:
-        if clip is None or a.name == clip or a.name.startswith(clip + "_") or a.name.startswith(clip):
-            action = a
+    for test in ((lambda n: True) if clip is None else (lambda n: n == clip),
+                 lambda n: n.startswith(clip + "_"), lambda n: n.startswith(clip)):
+        action = next((a for a in bpy.data.actions if test(a.name)), None)
+        if action is not None or clip is None:
             break
     res["played"] = action.name if action else None
     if action is None:

@@ -23,9 +23,17 @@ def import_file(path, script):
 
 
 def choose_action(want, script):
-    """The first action (by name) whose name starts with `want`, or the first of all when `want` is empty."""
+    """The action named `want` (or `want` with the importer's "_ARMATURE" suffix, or else the first, by name, that
+    starts with it: rigged.glb may hold both "NAME" and "NAME pingpong"), or the first of all when `want` is empty."""
     actions = sorted(bpy.data.actions, key=lambda a: a.name)
-    chosen = next((a for a in actions if a.name.startswith(want)), None) if want else (actions[0] if actions else None)
+    chosen = None
+    if want:
+        for test in (lambda n: n == want, lambda n: n.startswith(want + "_"), lambda n: n.startswith(want)):
+            chosen = next((a for a in actions if test(a.name)), None)
+            if chosen is not None:
+                break
+    elif actions:
+        chosen = actions[0]
     if chosen is None:
         raise SystemExit(f"{script}: no action '{want}' among {[a.name for a in actions]}")
     return chosen

@@ -86,7 +86,9 @@ struct TargetSkin {
   io::Mat4f transform = io::Mat4f::Identity();  ///< T: the file's scene space → world (the target's transform)
   int clip = -1;         ///< index in skin.clips
   AnimationSpec spec;
-  bool pingpong = false;  ///< spec.wrap resolved when the skin is loaded (auto: by the clip's ends)
+  /// How clip_time loops: spec.wrap resolved when the skin is loaded (auto: by the clip's ends; only for a looped
+  /// clip of positive duration). clip_time reads this, not spec.wrap.
+  bool pingpong = false;
 
   /// τ(t): the clip time at scene time t.
   double clip_time(double t) const;

@@ -34,7 +34,7 @@ Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene:
   for (const auto& w : skin->skin.warnings) spdlog::warn("target {}: {}", i, w);
   const auto& c = skin->skin.clips[*clip];
   const double seam = spec.animation.loop ? clip_seam(*skin, mesh) : 0.0;
-  skin->pingpong = spec.animation.loop && (spec.animation.wrap == control::ClipWrap::PingPong ||
+  skin->pingpong = spec.animation.loop && c.duration > 0.0 && (spec.animation.wrap == control::ClipWrap::PingPong ||
                                            (spec.animation.wrap == control::ClipWrap::Auto && seam > control::kClipSeamTolerance));
   spdlog::info("target {}: skinned, {} joints, clip '{}' ({:.3g} s, {} channels{})", i, skin->skin.joint_nodes.size(),
                c.name, c.duration, c.channels.size(),
@@ -72,7 +72,9 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
 }
 
 double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh) {
-  if (skin.clip < 0 || static_cast<std::size_t>(skin.clip) >= skin.skin.clips.size() || mesh.vertices.empty()) return 0.0;
+  if (skin.clip < 0 || static_cast<std::size_t>(skin.clip) >= skin.skin.clips.size() || mesh.vertices.empty() ||
+      skin.skin.joints.size() != mesh.vertices.size() || skin.skin.weights.size() != mesh.vertices.size())
+    return 0.0;
   const double duration = skin.skin.clips[static_cast<std::size_t>(skin.clip)].duration;
   std::vector<io::Mat4f> first, last;
   skin.clip_joint_matrices(0.0, first);

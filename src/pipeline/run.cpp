@@ -416,7 +416,11 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
   // A clip the fluid played back and forth (control::ClipWrap) is also written baked that way, so that looping it in
   // three.js, Blender or Unity plays what the liquid did.
   io::Skin clips = skin.skin;
-  if (skin.pingpong) clips.clips.push_back(io::pingpong_clip(skin.skin.clips[static_cast<std::size_t>(skin.clip)]));
+  if (skin.pingpong) {
+    io::AnimationClip played = skin.skin.clips[static_cast<std::size_t>(skin.clip)];
+    if (played.name.empty()) played.name = fmt::format("clip_{}", skin.clip);  // as write_rigged_glb names it
+    clips.clips.push_back(io::pingpong_clip(played));
+  }
   FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, clips,
                                 scene.targets[0].transform, scene.targets[0].tint));
   spdlog::info("rigged.glb: the final mesh in bind pose with {} joints and {} clip(s) ({} vertices by the fallback, "

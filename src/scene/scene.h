@@ -64,8 +64,8 @@ struct TargetSpec {
     }
   };
   std::vector<Swap> swaps;
-  /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "start", "skinning",
-  /// "weights"}. Without a clip the target is not animated, as a mesh without a skin.
+  /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "wrap", "start",
+  /// "skinning", "weights", "follow"}. Without a clip the target is not animated, as a mesh without a skin.
   control::AnimationSpec animation;
   /// Control strength over time (control/strength.h): [{"time": T, "value": S}, ...], S in [0, 1]; none: 1.
   std::vector<control::StrengthKey> strength;

@@ -32,6 +32,11 @@ TEST(ClipWrap, ClipTimeRepeatsHoldsOrRunsBackAndForth) {
   const double want_repeat[] = {0.2, 0.2, 0.8, 0.8, 0.2};
   const double want_hold[] = {0.2, 1.0, 1.0, 1.0, 1.0};
   const double want_pingpong[] = {0.2, 0.8, 0.2, 0.8, 0.2};
+  // At the clip's ends: repeated, τ = 1 starts over at 0; back and forth, it turns at 1 and is back at 0 at τ = 2.
+  EXPECT_DOUBLE_EQ(repeat.clip_time(1.0), 0.0);
+  EXPECT_DOUBLE_EQ(pingpong.clip_time(1.0), 1.0);
+  EXPECT_DOUBLE_EQ(pingpong.clip_time(1.5), 0.0);
+  EXPECT_DOUBLE_EQ(hold.clip_time(1.5), 1.0);
   for (int k = 0; k < 5; ++k) {
     EXPECT_NEAR(repeat.clip_time(t[k]), want_repeat[k], 1e-12) << t[k];
     EXPECT_NEAR(hold.clip_time(t[k]), want_hold[k], 1e-12) << t[k];
@@ -61,6 +66,12 @@ TEST(ClipWrap, APingpongClipPlaysTheClipThenItsMirror) {
     for (const io::NodeChannel& ch : baked.clips.back().channels)
       for (const auto* times : {&ch.translation_times, &ch.rotation_times, &ch.scale_times})
         for (std::size_t k = 1; k < times->size(); ++k) EXPECT_LT((*times)[k - 1], (*times)[k]) << clip.name;
+    // A key at the clip's end is not doubled: every channel ends at 2 · duration with its first key's value.
+    for (const io::NodeChannel& ch : baked.clips.back().channels)
+      if (!ch.rotation_times.empty()) {
+        EXPECT_DOUBLE_EQ(ch.rotation_times.back(), 2.0 * clip.duration);
+        EXPECT_TRUE(ch.rotations.back().isApprox(ch.rotations.front()));
+      }
     std::vector<io::Mat4f> a, b;
     for (int k = 0; k <= 40; ++k) {
       const double s = 2.0 * clip.duration * k / 40.0;
@@ -68,6 +79,30 @@ TEST(ClipWrap, APingpongClipPlaysTheClipThenItsMirror) {
       skin.global_matrices(c, s <= clip.duration ? s : 2.0 * clip.duration - s, b);
       for (std::size_t n = 0; n < a.size(); ++n) EXPECT_TRUE(a[n].isApprox(b[n], 1e-5f)) << clip.name << " at " << s;
     }
+  }
+}
+
+TEST(ClipWrap, KeysInsideTheClipAndANamelessClip) {
+  // Keys at 0.25 and 0.5 s of a 1 s clip: held before and after, mirrored about 1 s; a clip without a name.
+  io::AnimationClip clip;
+  clip.duration = 1.0;
+  io::NodeChannel ch;
+  ch.node = 2;
+  ch.rotation_times = {0.25, 0.5};
+  ch.rotations = {test::about(Vec3f::UnitZ(), 10), test::about(Vec3f::UnitZ(), 60)};
+  clip.channels = {ch};
+  const io::AnimationClip p = io::pingpong_clip(clip);
+  EXPECT_EQ(p.name, "clip pingpong");
+  ASSERT_EQ(p.channels[0].rotation_times.size(), 4u);
+  const double want[] = {0.25, 0.5, 1.5, 1.75};
+  for (int k = 0; k < 4; ++k) EXPECT_DOUBLE_EQ(p.channels[0].rotation_times[static_cast<std::size_t>(k)], want[k]);
+  io::Skin skin = test::bar_skeleton();
+  skin.clips = {clip, p};
+  std::vector<io::Mat4f> a, b;
+  for (double s : {0.0, 0.1, 0.4, 0.75, 1.0, 1.25, 1.6, 1.9, 2.0}) {
+    skin.global_matrices(1, s, a);
+    skin.global_matrices(0, s <= 1.0 ? s : 2.0 - s, b);
+    for (std::size_t n = 0; n < a.size(); ++n) EXPECT_TRUE(a[n].isApprox(b[n], 1e-5f)) << s;
   }
 }
 

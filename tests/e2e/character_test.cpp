@@ -106,11 +106,11 @@ INSTANTIATE_TEST_SUITE_P(
         CharacterCase{"anim_test",
                       R"({"mesh": "/usr/share/assimp/models/X/anim_test.x", "scale": 0.1, "animation": {"clip": "0"}})", 360,
                       3.0},
-        // huesitos' limbs swing at 10–30 m/s. Fluid they shed is steered back at least at the seed's own speed
+        // huesitos' limbs swing at up to 32 m/s. Fluid they shed is steered back at least at the seed's own speed
         // (adaptive.gather_chase): formed by ~1 s. At the approach speed alone (2.3 m/s) a fifth of the fluid chased a
         // limb for the whole run (bench/RESULTS.md, "Animated characters, seventh part"). Its clip ends far from where
         // it starts, so it plays back and forth (animation.wrap auto): from 2 s the window holds three turns (3.1,
-        // 4.7, 6.2 s), at which the repeated clip jumped and threw the fluid out.
+        // 4.7, 6.2 s). Repeated, the clip jumps at each of them (the one at 7.8 s threw 84 % of the fluid out).
         CharacterCase{"huesitos",
                       R"({"mesh": "/usr/share/assimp/models/FBX/huesitos.fbx", "scale": 0.01, "animation": {"clip": "0"}})",
                       420, 2.0},
