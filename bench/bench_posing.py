@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """What a skinned target's posing adds to a formed frame (issue 19: ≤ 10 % of a formed 10k frame). The demo character
-(examples/generated/character.glb, ~9k control samples, as examples/character.json) twice in one process: playing its
-`walk` clip (samples skinned every sub-step, metrics against the posed target) and standing still in its bind pose
-(the same mesh, samples and fluid, no clip). Both are stepped to `--formed` frames, then frame by frame in turn:
+(examples/generated/character.glb, ~9k control samples, as examples/character.json) three times in one process:
+  animated  playing its `walk` clip (samples skinned every sub-step, metrics against the posed target)
+  held      the same clip played a million times slower: every bit of posing runs (the samples skinned and their u_c
+            every sub-step, the posed target measured), but the pose stands, so the fluid is formed and still
+  still     standing in its bind pose (the same mesh, samples and fluid, no clip: nothing posed)
+All are stepped to `--formed` frames, then frame by frame in turn:
   solver   the solver's own time for the frame (LiveFrame.step_seconds: posing the samples every sub-step included)
   frame    the wall time of sim.step(metrics=True): the solver and the shape metrics (posed target included)
-and the ratios animated / still of their medians, per round and over rounds. The animated fluid also moves (the walk
-throws it about), so the ratio is an upper bound of what posing alone costs.
+and the ratios to still of their medians, per round and over rounds. held / still is what posing adds to a formed
+frame; animated / still adds what carrying the walking fluid costs (the walk throws it about at 2-3 m/s, and the CFL
+rule takes more sub-steps).
 usage: PYTHONPATH=build/release/python python3 bench/bench_posing.py [--formed 180] [--frames 60] [--rounds 3]
 """
 import argparse
@@ -32,7 +36,9 @@ if not glb.exists():
 rows = []
 with tempfile.TemporaryDirectory() as tmp:
     scenes = {}
-    for name, target in (("animated", {"mesh": str(glb), "animation": {"clip": "walk"}}), ("still", {"mesh": str(glb)})):
+    for name, target in (("animated", {"mesh": str(glb), "animation": {"clip": "walk"}}),
+                         ("held", {"mesh": str(glb), "animation": {"clip": "walk", "speed": 1e-6}}),
+                         ("still", {"mesh": str(glb)})):
         path = os.path.join(tmp, f"{name}.json")
         with open(path, "w") as f:
             json.dump({"targets": [target]}, f)
@@ -58,19 +64,20 @@ with tempfile.TemporaryDirectory() as tmp:
         for k in sims:
             med[f"{k}_substeps"] = statistics.mean(substeps[k])
             med[f"{k}_per_substep_ms"] = 1e3 * sum(solver[k]) / sum(substeps[k])
-        med["E_animated"] = last["animated"].get("error_rate", float("nan"))
-        med["E_still"] = last["still"].get("error_rate", float("nan"))
+        for k in sims:
+            med[f"E_{k}"] = last[k].get("error_rate", float("nan"))
         rows.append(med)
 
-print("| round | particles | animated solver ms | still solver ms | ratio | animated frame ms | still frame ms | ratio | E animated % | E still % |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+names = list(scenes)
+print("| round | particles | " + " | ".join(f"{k} solver ms | {k} frame ms" for k in names) + " | held/still frame | "
+      + " | ".join(f"E {k} %" for k in names) + " |")
+print("|---|---|" + "---|---|" * len(names) + "---|" + "---|" * len(names))
 for i, x in enumerate(rows):
-    print(f"| {i} | {x['particles']} | {x['animated_solver_ms']:.1f} | {x['still_solver_ms']:.1f} | "
-          f"{x['animated_solver_ms'] / x['still_solver_ms']:.3f} | {x['animated_frame_ms']:.1f} | {x['still_frame_ms']:.1f} | "
-          f"{x['animated_frame_ms'] / x['still_frame_ms']:.3f} | {x['E_animated']:.3f} | {x['E_still']:.3f} |")
+    print(f"| {i} | {x['particles']} | " + " | ".join(f"{x[k + '_solver_ms']:.1f} | {x[k + '_frame_ms']:.1f}" for k in names)
+          + f" | {x['held_frame_ms'] / x['still_frame_ms']:.3f} | " + " | ".join(f"{x['E_' + k]:.3f}" for k in names) + " |")
 m = {k: statistics.median(x[k] for x in rows) for k in rows[0]}
 print("medians: " + json.dumps({k: round(v, 3) for k, v in m.items()}))
-print(f"animated / still, solver: {m['animated_solver_ms'] / m['still_solver_ms']:.3f}; "
-      f"frame with metrics: {m['animated_frame_ms'] / m['still_frame_ms']:.3f}; sub-steps per frame "
-      f"{m['animated_substeps']:.2f} vs {m['still_substeps']:.2f}; per sub-step: "
-      f"{m['animated_per_substep_ms'] / m['still_per_substep_ms']:.3f}")
+for k in ("held", "animated"):
+    print(f"{k} / still: solver {m[k + '_solver_ms'] / m['still_solver_ms']:.3f}; frame with metrics "
+          f"{m[k + '_frame_ms'] / m['still_frame_ms']:.3f}; sub-steps per frame {m[k + '_substeps']:.2f} vs "
+          f"{m['still_substeps']:.2f}; per sub-step {m[k + '_per_substep_ms'] / m['still_per_substep_ms']:.3f}")

@@ -1,5 +1,6 @@
 #include "control/mesh_anchors.h"
 
+#include "control/cage_guard.h"
 #include "core/parallel.h"
 
 #include <fmt/format.h>
@@ -11,8 +12,24 @@ namespace ff::control {
 
 bool MeshAnchors::consistent(std::size_t samples) const {
   const std::size_t nv = mesh.vertices.size();
-  if (caged())
-    return cage.size() == samples * nv && triangle.empty() && vertex_joints.size() == nv && vertex_weights.size() == nv;
+  if (caged()) {
+    if (cage.size() != samples * nv || !triangle.empty() || vertex_joints.size() != nv || vertex_weights.size() != nv)
+      return false;
+    if (!guarded()) return true;
+    const std::size_t nt = mesh.triangles.size();
+    if (guard_begin.size() != samples + 1 || guard_depth.size() != samples || guard_begin.back() != guard_triangle.size() ||
+        orientation.size() != nt || across.size() != nt || corner_begin.size() != nv + 1 ||
+        corner_begin.back() != corner_triangle.size())
+      return false;
+    for (std::size_t i = 0; i < samples; ++i)
+      if (guard_begin[i] > guard_begin[i + 1]) return false;
+    for (const Index t : guard_triangle)
+      if (t >= nt) return false;
+    for (const auto& tri : mesh.triangles)
+      for (const Index v : tri)
+        if (v >= nv) return false;
+    return true;
+  }
   if (triangle.size() != samples || bary.size() != samples || height.size() != samples || vertex_joints.size() != nv ||
       vertex_weights.size() != nv)
     return false;
@@ -34,7 +51,7 @@ Vec3f MeshAnchors::place(std::size_t i, const std::vector<Vec3f>& posed) const {
     const float* w = cage.data() + i * posed.size();
     Vec3f x = Vec3f::Zero();
     for (std::size_t v = 0; v < posed.size(); ++v) x += w[v] * posed[v];
-    return x;
+    return guarded() ? keep_inside(*this, i, x, posed) : x;
   }
   const auto& tri = mesh.triangles[triangle[i]];
   const Vec3f &a = posed[tri[0]], &b = posed[tri[1]], &c = posed[tri[2]];

@@ -10,7 +10,9 @@
 //    unit normal (the mesh's winding), on the posed triangle. It stays on the posed sheet exactly.
 //  - a closed mesh's sample is the mean value coordinates (Ju, Schaefer & Warren 2005) of the mesh as a cage: one
 //    weight per vertex, summing to 1, that reproduce the sample at the bind pose and move it smoothly with the posed
-//    vertices, inside where the cage bends (though not provably: a cage folded hard can push some out).
+//    vertices, inside where the cage bends (though not provably: a cage folded hard can push some out, and linear
+//    blend skinning folds a coarse mesh's bends: huesitos.fbx kept 96.4 % of its samples inside at worst). So a
+//    cage can also carry a guard (control/cage_guard.h) that eases the samples its clip brings out back in.
 // A cage costs one weight per sample and vertex, so it is for coarse meshes (AnimationSpec::follow).
 #include "control/skinning.h"
 #include "core/error.h"
@@ -34,13 +36,26 @@ struct MeshAnchors {
   std::vector<float> height;
   /// ... or in the cage (a closed mesh): sample i's weights are cage[i·V, (i+1)·V), V the vertex count.
   std::vector<float> cage;
+  /// A cage's guard (control/cage_guard.h; empty: none): the samples that the clip's poses bring near or out of the
+  /// posed mesh, each with the triangles it came near (guard_triangle[guard_begin[i], guard_begin[i+1])) and the depth
+  /// guard_depth[i] below which it is eased back in; per triangle, whether its winding is outward (+1, −1) and the
+  /// triangle across each edge (kInvalidIndex: a border or a non-manifold edge); per vertex, its triangles.
+  std::vector<std::uint32_t> guard_begin;
+  std::vector<Index> guard_triangle;
+  std::vector<float> guard_depth;
+  std::vector<std::int8_t> orientation;
+  std::vector<std::array<Index, 3>> across;
+  std::vector<std::uint32_t> corner_begin;
+  std::vector<Index> corner_triangle;
 
   bool caged() const { return !cage.empty(); }
+  bool guarded() const { return !guard_begin.empty(); }
   /// Whether the arrays agree: one anchor per sample of `samples`, triangles and vertices in range.
   bool consistent(std::size_t samples) const;
   /// The mesh's vertices skinned by `joints` (world, posed; no keyframed pose).
   void pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const;
-  /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices).
+  /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices); a guarded
+  /// sample is then kept inside the posed mesh (control/cage_guard.h).
   Vec3f place(std::size_t i, const std::vector<Vec3f>& posed) const;
 };
 

@@ -4,6 +4,7 @@
 #include "io/load_mesh.h"
 #include "core/parallel.h"
 #include "sampling/skin_weights.h"
+#include "control/cage_guard.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -108,6 +109,24 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
         if (!anchors) return Error{anchors.error().kind, fmt::format("targets[{}]: {}", i, anchors.error().message)};
         spdlog::info("target {}: the control samples follow the posed mesh ({})", i,
                      sheet ? "on its triangles" : fmt::format("in it as a cage of {} vertices", nv));
+        if (!sheet) {
+          // The cage's guard (control/cage_guard.h), from the mesh posed at kGuardPoses times of the clip.
+          std::vector<std::vector<Vec3f>> poses;
+          const std::size_t clip = static_cast<std::size_t>(std::max(skin->clip, 0));
+          const double duration = clip < skin->skin.clips.size() ? skin->skin.clips[clip].duration : 0.0;
+          std::vector<io::Mat4f> K;
+          control::PosedJoints joints;
+          for (int k = 0; k < control::kGuardPoses && duration > 0.0; ++k) {
+            skin->clip_joint_matrices(duration * std::min(double(k) / double(control::kGuardPoses - 1), 1.0 - 1e-9), K);
+            joints.set(K, skin->spec.skinning);
+            anchors->pose_vertices(joints, poses.emplace_back());
+          }
+          auto guard = control::guard_cage(*anchors, field, poses, ct.set.spacing);
+          if (!guard) return Error{guard.error().kind, fmt::format("targets[{}]: {}", i, guard.error().message)};
+          spdlog::info("target {}: {} of its {} control samples come near the surface at the clip's bends and are kept "
+                       "inside the posed mesh ({:.1f} triangles each)",
+                       i, guard->guarded, ct.set.size(), guard->guarded ? double(guard->triangles) / double(guard->guarded) : 0.0);
+        }
         sk.anchors = std::make_shared<const control::MeshAnchors>(std::move(*anchors));
         ct.anchors = sk.anchors;
       }

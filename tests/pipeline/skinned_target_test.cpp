@@ -27,12 +27,14 @@ struct SkinnedCase {
   fs::path mesh;
   std::string clip;
   Vec3f scale;
-  /// The least share of the samples inside the bind mesh that must stay inside the posed mesh at every time.
-  /// huesitos.fbx is a 62-vertex cylinder bent through 9 bones: its posed surface is the linear interpolation of a
-  /// few far-apart posed vertices, which cuts the corners of every bend. Skinned by their own weights its samples
-  /// followed the smooth blend of the bones (86 % stayed inside); held in the mesh as a cage (control/mesh_anchors.h)
-  /// 96.4 % do at worst (t = 0.39 s, where the posed mesh keeps 91 % of its volume), not yet what issue 19 asks (99 %).
-  double keep_inside = 0.99;
+  /// The least share of the samples inside the bind mesh that must stay inside the posed mesh at a time when the pose
+  /// folds the mesh over itself (elsewhere 0.99, as issue 19 asks). huesitos.fbx is a 62-vertex cylinder bent
+  /// through 9 bones: its posed surface is the linear interpolation of a few far-apart posed vertices, which cuts the
+  /// corners of every bend, and at t = 0.39 s and 0.78 s folds three triangles inside out. Skinned by their own weights
+  /// its samples followed the smooth blend of the bones (86 % stayed inside); held in the mesh as a cage
+  /// (control/mesh_anchors.h) 96.4 % did at worst; guarded too (control/cage_guard.h) 97.8 % and 99.3 % do at the two
+  /// times where the mesh folds, 100 % at the three where it does not.
+  double keep_inside_folded = 0.99;
   /// A sheet's samples stay within this many d_c of the posed sheet: they ride its posed triangles
   /// (control::MeshAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
   /// 1.03 d_c off, where the 10-vertex sheet cuts its bend's corner).
@@ -53,7 +55,7 @@ std::vector<SkinnedCase> cases() {
   return {{"character", character_glb(), "walk", Vec3f::Ones()},
           {"simple_skin", "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf", "0", Vec3f::Ones()},
           {"anim_test", "/usr/share/assimp/models/X/anim_test.x", "0", Vec3f::Constant(0.1f)},
-          {"huesitos", "/usr/share/assimp/models/FBX/huesitos.fbx", "0", Vec3f::Constant(0.01f), 0.96}};
+          {"huesitos", "/usr/share/assimp/models/FBX/huesitos.fbx", "0", Vec3f::Constant(0.01f), 0.975}};
 }
 
 class Skinned : public ::testing::TestWithParam<SkinnedCase> {};
@@ -124,6 +126,30 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   for (std::size_t i = 0; i < in_bind.size(); ++i) n_in += in_bind[i] = bind_field->inside(sk.bind_samples[i]);
   std::printf("%s: %zu samples, %.2f %% inside the bind mesh%s\n", c.name.c_str(), in_bind.size(),
               100.0 * double(n_in) / double(in_bind.size()), sheet ? " (a sheet)" : "");
+  if (sk.anchors && sk.anchors->caged()) {
+    // A cage is guarded (control/cage_guard.h); what the guard adds to placing the samples, one thread, 20 poses.
+    ASSERT_TRUE(sk.anchors->guarded());
+    control::MeshAnchors bare = *sk.anchors;
+    bare.guard_begin.clear();
+    double guarded_s = 0.0, bare_s = 0.0;
+    Vec3f sum = Vec3f::Zero();  // kept, so the placing is not optimised away
+    for (int k = 0; k < 20; ++k) {
+      std::vector<io::Mat4f> K;
+      sk.skin->world_joint_matrices(duration * k / 20.0, K);
+      control::PosedJoints joints;
+      joints.set(K, control::SkinningMethod::Linear);
+      std::vector<Vec3f> v;
+      bare.pose_vertices(joints, v);
+      for (const control::MeshAnchors* a : std::initializer_list<const control::MeshAnchors*>{sk.anchors.get(), &bare}) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (std::size_t i = 0; i < sk.bind_samples.size(); ++i) sum += a->place(i, v);
+        (a == &bare ? bare_s : guarded_s) += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
+    }
+    std::printf("%s: placing %zu samples in the cage, %.3f ms alone, %.3f ms guarded (one thread)\n", c.name.c_str(),
+                sk.bind_samples.size(), 1e3 * bare_s / 20, 1e3 * guarded_s / 20);
+    EXPECT_TRUE(std::isfinite(sum.norm()));
+  }
   for (int k = 0; k <= 4; ++k) {
     const double time = duration * k / 4.0 * 0.999;
     std::vector<io::Mat4f> K;
@@ -150,13 +176,50 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
     for (std::size_t i = 0; i < sk.bind_samples.size(); ++i)
       if (in_bind[i]) kept += field->inside(x[i]);
     const double frac = double(kept) / double(n_in);
+    if (sk.anchors && sk.anchors->caged()) {  // the cage without its guard, for the record
+      control::MeshAnchors bare = *sk.anchors;
+      bare.guard_begin.clear();
+      std::vector<Vec3f> v;
+      bare.pose_vertices(joints, v);
+      std::size_t bare_kept = 0;
+      for (std::size_t i = 0; i < sk.bind_samples.size(); ++i)
+        if (in_bind[i]) bare_kept += field->inside(bare.place(i, v));
+      std::printf("%s t=%.3f: the cage alone keeps %.2f %% inside\n", c.name.c_str(), time, 100.0 * double(bare_kept) / double(n_in));
+    }
+    // Triangles the pose turns inside out (linear blend skinning folds a coarse mesh's crushed bend over itself): just
+    // outside one the winding number is no longer below ½, or just inside no longer above, where at bind it was. The
+    // fold's pocket is outside by the winding number though inside by its nearest triangle, and no sample placed from
+    // the mesh is sure to stay out of it (control/cage_guard.h). (At bind, a triangle inside another part, as the demo
+    // character's overlapping limbs have, is not a surface triangle and is not counted.)
+    int folded = 0;
+    for (const auto& tri : posed.triangles) {
+      const auto surface = [&](const sampling::MeshField& f, const std::vector<Vec3f>& v, const Vec3f& out) {
+        const Vec3f mid = (v[tri[0]] + v[tri[1]] + v[tri[2]]) / 3.0f, d = 0.05f * sk.spacing * out;
+        return f.winding_number(mid + d) < 0.5f && f.winding_number(mid - d) > 0.5f;
+      };
+      const auto normal = [&](const std::vector<Vec3f>& v) {
+        const Vec3f n = (v[tri[1]] - v[tri[0]]).cross(v[tri[2]] - v[tri[0]]);
+        return n.norm() > 0.0f ? Vec3f(n.normalized()) : Vec3f::Zero();
+      };
+      const Vec3f nb = normal(sk.bind_mesh.vertices), np = normal(posed.vertices);
+      if (nb.isZero() || np.isZero()) continue;
+      // The file's winding may be inward: the side of the bind triangle that is outside decides (both ways tried).
+      const float sign = surface(*bind_field, sk.bind_mesh.vertices, nb) ? 1.0f : -1.0f;
+      if (!surface(*bind_field, sk.bind_mesh.vertices, sign * nb)) continue;
+      folded += !surface(*field, posed.vertices, sign * np);
+    }
     const Vec3f size = field->bounds().size();
     // The posed mesh's own volume against its bind volume: linear blend skinning of a coarse mesh caves in at the
     // bends (huesitos loses 9-12 % at two of these times), and samples that keep their volume cannot all fit inside.
     std::printf("%s t=%.3f: %.2f %% of the samples inside at bind are inside the posed mesh; its size %.3f %.3f %.3f, "
-                "its volume %.1f %% of the bind mesh's\n",
-                c.name.c_str(), time, 100.0 * frac, size.x(), size.y(), size.z(), 100.0 * field->volume() / bind_field->volume());
-    EXPECT_GE(frac, c.keep_inside) << c.name << " at t = " << time;
+                "its volume %.1f %% of the bind mesh's; %d of its %zu surface triangles no longer bound it (folded, or in another part)\n",
+                c.name.c_str(), time, 100.0 * frac, size.x(), size.y(), size.z(), 100.0 * field->volume() / bind_field->volume(),
+                folded, posed.triangles.size());
+    EXPECT_GE(frac, folded == 0 ? 0.99 : c.keep_inside_folded) << c.name << " at t = " << time << ", " << folded << " folded";
+    // huesitos folds at these two times only; anim_test never.
+    if (c.name == "huesitos" || c.name == "anim_test") {
+      EXPECT_EQ(folded > 0, c.name == "huesitos" && (k == 1 || k == 2)) << c.name << " at t = " << time;
+    }
   }
 }
 
