@@ -64,7 +64,24 @@ Vec3f closest_feature(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3
   return feature = 0, a + (vb / sum) * ab + (vc / sum) * ac;
 }
 
-Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std::vector<Vec3f>& posed) {
+float posed_winding_number(const MeshAnchors& a, const std::vector<Vec3f>& posed, const Vec3f& p) {
+  // Van Oosterom & Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|), per outward triangle.
+  // In float: only which side of ½ it is on matters, and a fold's samples are not on the surface.
+  float sum = 0.0f;
+  for (std::size_t t = 0; t < a.mesh.triangles.size(); ++t) {
+    const auto& tri = a.mesh.triangles[t];
+    const Vec3f u = posed[tri[0]] - p, v = posed[tri[1]] - p, w = posed[tri[2]] - p;
+    const float lu = u.norm(), lv = v.norm(), lw = w.norm();
+    const float num = u.dot(v.cross(w)), den = lu * lv * lw + u.dot(v) * lw + u.dot(w) * lv + v.dot(w) * lu;
+    sum += float(a.orientation[t]) * std::atan2(num, den);
+  }
+  return sum / (2.0f * 3.14159265f);
+}
+
+namespace {
+
+// The guard's easing alone (see keep_inside).
+Vec3f ease_in(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std::vector<Vec3f>& posed) {
   const std::uint32_t begin = a.guard_begin[i], end = a.guard_begin[i + 1];
   if (begin == end) return x;
   float best = std::numeric_limits<float>::infinity();
@@ -91,6 +108,29 @@ Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std
   return q - (phi / n.norm()) * n;
 }
 
+}  // namespace
+
+Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std::vector<Vec3f>& posed, bool folds) {
+  const Vec3f y = ease_in(a, i, x, posed);
+  if (!folds || a.fold_partner.empty() || a.fold_partner[i] == kInvalidIndex) return y;
+  // Only where the pose folds one of its triangles against a neighbour is the (costly, exact) winding number taken.
+  bool fold = false;
+  for (std::uint32_t k = a.guard_begin[i]; k < a.guard_begin[i + 1] && !fold; ++k) {
+    const Index t = a.guard_triangle[k];
+    const Vec3f n = face_normal(a, posed, t);
+    for (const Index o : a.across[t]) fold = fold || (o != kInvalidIndex && n.dot(face_normal(a, posed, o)) < kFoldCosine);
+  }
+  if (!fold || posed_winding_number(a, posed, y) > 0.5f) return y;
+  // In a fold's pocket: to the last point outside on the way to its partner, deep in the same part and inside at
+  // every pose the clip was tried at, then kFoldSteps halvings of that way (the inner end is kept: inside).
+  Vec3f out = y, in = a.place(a.fold_partner[i], posed);
+  for (int k = 0; k < kFoldSteps; ++k) {
+    const Vec3f mid = 0.5f * (out + in);
+    (posed_winding_number(a, posed, mid) > 0.5f ? in : out) = mid;
+  }
+  return in;
+}
+
 Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bind,
                                   std::span<const std::vector<Vec3f>> poses, float spacing) {
   if (!a.caged()) return param_error("only a cage's samples can be guarded");
@@ -98,7 +138,7 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   for (const auto& p : poses)
     if (p.size() != nv) return param_error("a pose for a cage's guard does not match its vertices");
   if (!(spacing > 0.0f) || !std::isfinite(spacing)) return param_error("a cage's guard needs a positive spacing");
-  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear();  // place() is the cage alone from here
+  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();  // place(): the cage alone
 
   // Orientation: the field keeps each triangle outward (flipping a file's inconsistent patches).
   a.orientation.assign(nt, 1);
@@ -179,6 +219,38 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
     a.guard_triangle.insert(a.guard_triangle.end(), ts.begin(), ts.end());
     a.guard_begin[i + 1] = static_cast<std::uint32_t>(a.guard_triangle.size());
   }
+  // Samples in a fold's pocket: where the pose folds the mesh over itself, the pocket between the folds is outside by
+  // the winding number though inside by its nearest triangle, and easing along that triangle cannot leave it. A
+  // sample that ends outside at one of the poses is given a partner: the nearest sample at least kFoldPartnerDepth
+  // spacings deep at bind that is inside at every pose; posed and outside, it is moved towards its partner.
+  std::vector<std::uint8_t> out(ns, 0), deep(ns, 0);
+  core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    deep[i] = -bind.signed_distance(a.place(i, a.mesh.vertices)) >= kFoldPartnerDepth * spacing;
+  });
+  for (const auto& p : poses) {
+    FF_TRY(sampling::MeshField field, bind.moved(p));
+    core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      if (!(guard[i] || deep[i])) return;
+      if (field.inside(a.place(i, p))) return;
+      if (guard[i]) out[i] = 1;
+      deep[i] = 0;  // a partner is inside at every pose
+    });
+  }
+  std::vector<Vec3f> at_bind(ns);
+  for (std::size_t i = 0; i < ns; ++i) at_bind[i] = a.place(i, a.mesh.vertices);
+  std::vector<Index> partner(ns, kInvalidIndex);
+  core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
+    const auto i = static_cast<std::size_t>(ii);
+    if (!out[i]) return;
+    float best = std::numeric_limits<float>::infinity();
+    for (std::size_t j = 0; j < ns; ++j)
+      if (deep[j] && !out[j])
+        if (const float d2 = (at_bind[j] - at_bind[i]).squaredNorm(); d2 < best) best = d2, partner[i] = static_cast<Index>(j);
+  });
+  stats.folded = static_cast<std::size_t>(std::count_if(partner.begin(), partner.end(), [](Index j) { return j != kInvalidIndex; }));
+  if (stats.folded > 0) a.fold_partner = std::move(partner);
   return stats;
 }
 

@@ -119,9 +119,11 @@ void ControlSamples::pose(double time, float dt) {
     }
   }
   // Where a sample is (world, no keyframed pose): placed from the posed mesh, or skinned by its own weights.
-  const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices) {
+  // A sample moved out of a fold's pocket (control/cage_guard.h) jumps as it goes in and out of it: its velocity is
+  // its motion without that move (measured on huesitos: with the jump in u_c, 23 % more sub-steps by the CFL rule).
+  const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices, bool folds) {
     const Index a = anchor_[i];
-    return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices)
+    return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices, folds)
                               : joints.apply(joints_[i], weights_[i], rest_position_[i]);
   };
   const float inv_dt = dt > 0.0f ? 1.0f / dt : 0.0f;
@@ -129,14 +131,19 @@ void ControlSamples::pose(double time, float dt) {
     const auto i = static_cast<std::size_t>(ii);
     const auto t = target[i];
     if (skinned_[i]) {
-      const Vec3f x = now[t].apply(skinned_at(i, now_joints_[t], now_vertices_[t]));
+      const Vec3f x = now[t].apply(skinned_at(i, now_joints_[t], now_vertices_[t], true));
       if (options_.normals) {
         // The normal turns with the blended linear part of its sample (a rotation where the skin moves rigidly).
         const io::Mat4f m = io::blend_matrix(now_joints_[t].matrices(), joints_[i], weights_[i]);
         normal[i] = now[t].rotation * (m.topLeftCorner<3, 3>() * rest_normal_[i]);
       }
-      if (options_.velocities)
-        velocity[i] = (next[t].apply(skinned_at(i, next_joints_[t], next_vertices_[t])) - x) * inv_dt;
+      if (options_.velocities) {
+        const Index a = anchor_[i];
+        const bool folds = a != kInvalidIndex && !anchors_[t]->fold_partner.empty() &&
+                           anchors_[t]->fold_partner[a] != kInvalidIndex;
+        const Vec3f from = folds ? now[t].apply(skinned_at(i, now_joints_[t], now_vertices_[t], false)) : x;
+        velocity[i] = (next[t].apply(skinned_at(i, next_joints_[t], next_vertices_[t], false)) - from) * inv_dt;
+      }
       position[i] = x;
       return;
     }

@@ -25,6 +25,11 @@ bool MeshAnchors::consistent(std::size_t samples) const {
       if (guard_begin[i] > guard_begin[i + 1]) return false;
     for (const Index t : guard_triangle)
       if (t >= nt) return false;
+    if (!fold_partner.empty()) {
+      if (fold_partner.size() != samples) return false;
+      for (std::size_t i = 0; i < samples; ++i)  // a partner is a sample with no partner of its own
+        if (const Index j = fold_partner[i]; j != kInvalidIndex && (j >= samples || fold_partner[j] != kInvalidIndex)) return false;
+    }
     for (const auto& tri : mesh.triangles)
       for (const Index v : tri)
         if (v >= nv) return false;
@@ -46,12 +51,12 @@ void MeshAnchors::pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& o
   for (std::size_t v = 0; v < out.size(); ++v) out[v] = joints.apply(vertex_joints[v], vertex_weights[v], mesh.vertices[v]);
 }
 
-Vec3f MeshAnchors::place(std::size_t i, const std::vector<Vec3f>& posed) const {
+Vec3f MeshAnchors::place(std::size_t i, const std::vector<Vec3f>& posed, bool folds) const {
   if (caged()) {
     const float* w = cage.data() + i * posed.size();
     Vec3f x = Vec3f::Zero();
     for (std::size_t v = 0; v < posed.size(); ++v) x += w[v] * posed[v];
-    return guarded() ? keep_inside(*this, i, x, posed) : x;
+    return guarded() ? keep_inside(*this, i, x, posed, folds) : x;
   }
   const auto& tri = mesh.triangles[triangle[i]];
   const Vec3f &a = posed[tri[0]], &b = posed[tri[1]], &c = posed[tri[2]];

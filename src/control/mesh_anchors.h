@@ -43,6 +43,8 @@ struct MeshAnchors {
   std::vector<std::uint32_t> guard_begin;
   std::vector<Index> guard_triangle;
   std::vector<float> guard_depth;
+  /// Per sample (empty: none): a deep sample that one in a fold's pocket is moved towards (kInvalidIndex: none).
+  std::vector<Index> fold_partner;
   std::vector<std::int8_t> orientation;
   std::vector<std::array<Index, 3>> across;
   std::vector<std::uint32_t> corner_begin;
@@ -56,7 +58,8 @@ struct MeshAnchors {
   void pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const;
   /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices); a guarded
   /// sample is then kept inside the posed mesh (control/cage_guard.h).
-  Vec3f place(std::size_t i, const std::vector<Vec3f>& posed) const;
+  /// `folds` false: without the move out of a fold's pocket (control/cage_guard.h), for the sample's velocity.
+  Vec3f place(std::size_t i, const std::vector<Vec3f>& posed, bool folds = true) const;
 };
 
 /// Anchors for `samples` (world, bind pose) on the sheet `mesh`: each sample's closest triangle

@@ -124,8 +124,9 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
           auto guard = control::guard_cage(*anchors, field, poses, ct.set.spacing);
           if (!guard) return Error{guard.error().kind, fmt::format("targets[{}]: {}", i, guard.error().message)};
           spdlog::info("target {}: {} of its {} control samples come near the surface at the clip's bends and are kept "
-                       "inside the posed mesh ({:.1f} triangles each)",
-                       i, guard->guarded, ct.set.size(), guard->guarded ? double(guard->triangles) / double(guard->guarded) : 0.0);
+                       "inside the posed mesh ({:.1f} triangles each; {} where it folds over itself)",
+                       i, guard->guarded, ct.set.size(), guard->guarded ? double(guard->triangles) / double(guard->guarded) : 0.0,
+                       guard->folded);
         }
         sk.anchors = std::make_shared<const control::MeshAnchors>(std::move(*anchors));
         ct.anchors = sk.anchors;

@@ -119,6 +119,34 @@ TEST(CageGuard, TheGuardedCageKeepsTheBentBarsSamplesInside) {
   EXPECT_LT(step_guarded, 3.0f * step_cage);
 }
 
+// The exact winding number that a fold's samples are checked by, against the field's (in double) on the bent bar.
+TEST(CageGuard, ThePosedWindingNumberIsTheFieldsOnTheBentBar) {
+  Bent s;
+  auto field = sampling::MeshField::build(s.bar);
+  ASSERT_TRUE(field.has_value());
+  s.samples = {Vec3f(0.05f, 0.5f, 0.0f)};
+  auto cage = anchor_to_cage(s.bar, s.skin.joints, s.skin.weights, s.samples, 1000);
+  ASSERT_TRUE(cage.has_value());
+  std::vector<std::vector<Vec3f>> poses(1);
+  cage->pose_vertices(bend(s.skin, 1.0), poses[0]);
+  ASSERT_TRUE(guard_cage(*cage, *field, poses, s.spacing).has_value());
+  io::TriangleMesh bent = s.bar;
+  bent.vertices = poses[0];
+  auto bent_field = sampling::MeshField::build(bent);
+  ASSERT_TRUE(bent_field.has_value());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-0.3f, 1.2f);
+  int inside = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const Vec3f p(u(rng), u(rng), 0.3f * u(rng));
+    const double ref = bent_field->winding_number_exact(p);
+    const float w = posed_winding_number(*cage, poses[0], p);
+    EXPECT_NEAR(w, ref, 1e-3) << k;
+    inside += w > 0.5f;
+  }
+  EXPECT_GT(inside, 20);  // some of the points were inside
+}
+
 TEST(CageGuard, RefusesWhatDoesNotMatch) {
   Bent s;
   auto field = sampling::MeshField::build(s.bar);
@@ -131,6 +159,15 @@ TEST(CageGuard, RefusesWhatDoesNotMatch) {
   EXPECT_FALSE(guard_cage(*cage, *field, {}, 0.0f).has_value());
   MeshAnchors sheet;
   EXPECT_FALSE(guard_cage(sheet, *field, {}, s.spacing).has_value());
+  // A fold partner out of range, or one with a partner of its own, is not consistent.
+  ASSERT_TRUE(guard_cage(*cage, *field, {}, s.spacing).has_value());
+  ASSERT_TRUE(cage->consistent(1));
+  cage->fold_partner = {5};
+  EXPECT_FALSE(cage->consistent(1));
+  cage->fold_partner = {0};
+  EXPECT_FALSE(cage->consistent(1));
+  cage->fold_partner = {kInvalidIndex};
+  EXPECT_TRUE(cage->consistent(1));
 }
 
 }  // namespace
