@@ -45,20 +45,41 @@ Vec3f pseudo_normal(const MeshAnchors& a, const std::vector<Vec3f>& posed, Index
 
 Vec3f closest_feature(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, int& feature) {
   const Vec3f ab = b - a, ac = c - a, ap = p - a;
+  if (const float n2 = ab.cross(ac).squaredNorm(); !(n2 > 1e-12f * ab.squaredNorm() * ac.squaredNorm())) {
+    // Degenerate (a needle, or corners that coincide): the closest point of its three edges as segments.
+    const Vec3f* corner[3] = {&a, &b, &c};
+    float best = std::numeric_limits<float>::infinity();
+    Vec3f q = a;
+    feature = 4;
+    for (int e = 0; e < 3; ++e) {
+      const Vec3f& s = *corner[e];
+      const Vec3f d = *corner[(e + 1) % 3] - s;
+      const float len2 = d.squaredNorm();
+      const float t = len2 > 0.0f ? std::clamp((p - s).dot(d) / len2, 0.0f, 1.0f) : 0.0f;
+      const Vec3f x = s + t * d;
+      if (const float d2 = (p - x).squaredNorm(); d2 < best)
+        best = d2, q = x, feature = t <= 0.0f ? 4 + e : t >= 1.0f ? 4 + (e + 1) % 3 : 1 + e;
+    }
+    return q;
+  }
   const float d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0.0f && d2 <= 0.0f) return feature = 4, a;
   const Vec3f bp = p - b;
   const float d3 = ab.dot(bp), d4 = ac.dot(bp);
   if (d3 >= 0.0f && d4 <= d3) return feature = 5, b;
   const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) return feature = 1, a + (d1 / (d1 - d3)) * ab;  // d1 − d3 > 0 here
+  // Each edge's denominator is 0 only where its two corners coincide (a triangle repeating a vertex): then its corner.
+  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) return feature = 1, d1 - d3 > 0.0f ? Vec3f(a + (d1 / (d1 - d3)) * ab) : a;
   const Vec3f cp = p - c;
   const float d5 = ab.dot(cp), d6 = ac.dot(cp);
   if (d6 >= 0.0f && d5 <= d6) return feature = 6, c;
   const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) return feature = 3, a + (d2 / (d2 - d6)) * ac;
+  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) return feature = 3, d2 - d6 > 0.0f ? Vec3f(a + (d2 / (d2 - d6)) * ac) : a;
   const float va = d3 * d6 - d5 * d4;
-  if (va <= 0.0f && d4 - d3 >= 0.0f && d5 - d6 >= 0.0f) return feature = 2, b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  if (va <= 0.0f && d4 - d3 >= 0.0f && d5 - d6 >= 0.0f) {
+    const float den = (d4 - d3) + (d5 - d6);
+    return feature = 2, den > 0.0f ? Vec3f(b + ((d4 - d3) / den) * (c - b)) : b;
+  }
   const float sum = va + vb + vc;
   if (!(sum > 0.0f)) return feature = 4, a;  // degenerate (a needle or a point) that no region above took: its corner
   return feature = 0, a + (vb / sum) * ab + (vc / sum) * ac;
@@ -73,7 +94,7 @@ float posed_winding_number(const MeshAnchors& a, const std::vector<Vec3f>& posed
     const Vec3f u = posed[tri[0]] - p, v = posed[tri[1]] - p, w = posed[tri[2]] - p;
     const float lu = u.norm(), lv = v.norm(), lw = w.norm();
     const float num = u.dot(v.cross(w)), den = lu * lv * lw + u.dot(v) * lw + u.dot(w) * lv + v.dot(w) * lu;
-    sum += float(a.orientation[t]) * std::atan2(num, den);
+    if (a.orientation[t] != 0) sum += float(a.orientation[t]) * std::atan2(num, den);
   }
   return sum / (2.0f * 3.14159265f);
 }
@@ -121,9 +142,11 @@ Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std
     for (const Index o : a.across[t]) fold = fold || (o != kInvalidIndex && n.dot(face_normal(a, posed, o)) < kFoldCosine);
   }
   if (!fold || posed_winding_number(a, posed, y) > 0.5f) return y;
-  // In a fold's pocket: to the last point outside on the way to its partner, deep in the same part and inside at
-  // every pose the clip was tried at, then kFoldSteps halvings of that way (the inner end is kept: inside).
+  // In a fold's pocket: towards its partner, deep in the same part and inside at every pose the clip was tried at,
+  // by kFoldSteps halvings of the way between them, keeping the inner end (inside). A partner outside at this pose
+  // (one the clip's tried poses did not show) leaves the sample where it was eased to.
   Vec3f out = y, in = a.place(a.fold_partner[i], posed);
+  if (!(posed_winding_number(a, posed, in) > 0.5f)) return y;
   for (int k = 0; k < kFoldSteps; ++k) {
     const Vec3f mid = 0.5f * (out + in);
     (posed_winding_number(a, posed, mid) > 0.5f ? in : out) = mid;
@@ -140,8 +163,9 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   if (!(spacing > 0.0f) || !std::isfinite(spacing)) return param_error("a cage's guard needs a positive spacing");
   a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();  // place(): the cage alone
 
-  // Orientation: the field keeps each triangle outward (flipping a file's inconsistent patches).
-  a.orientation.assign(nt, 1);
+  // Orientation: the field keeps each triangle outward (flipping a file's inconsistent patches). One it dropped (zero
+  // area at bind) gets 0: no normal, and no share of the winding number, should a pose open it up.
+  a.orientation.assign(nt, 0);
   for (Index k = 0; k < bind.triangle_count(); ++k) {
     const Index t = bind.source_triangle(k);
     const auto& f = bind.triangles()[k];

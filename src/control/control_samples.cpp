@@ -120,7 +120,7 @@ void ControlSamples::pose(double time, float dt) {
   }
   // Where a sample is (world, no keyframed pose): placed from the posed mesh, or skinned by its own weights.
   // A sample moved out of a fold's pocket (control/cage_guard.h) jumps as it goes in and out of it: its velocity is
-  // its motion without that move (measured on huesitos: with the jump in u_c, 23 % more sub-steps by the CFL rule).
+  // its motion without that move (measured on huesitos: with the jump in u_c, 17 % more sub-steps by the CFL rule).
   const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices, bool folds) {
     const Index a = anchor_[i];
     return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices, folds)

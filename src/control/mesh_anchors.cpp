@@ -22,9 +22,18 @@ bool MeshAnchors::consistent(std::size_t samples) const {
         corner_begin.back() != corner_triangle.size())
       return false;
     for (std::size_t i = 0; i < samples; ++i)
-      if (guard_begin[i] > guard_begin[i + 1]) return false;
+      if (guard_begin[i] > guard_begin[i + 1] || !(guard_depth[i] >= 0.0f) || !std::isfinite(guard_depth[i])) return false;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (corner_begin[v] > corner_begin[v + 1]) return false;
     for (const Index t : guard_triangle)
       if (t >= nt) return false;
+    for (const Index t : corner_triangle)
+      if (t >= nt) return false;
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (orientation[t] < -1 || orientation[t] > 1) return false;
+      for (const Index o : across[t])
+        if (o != kInvalidIndex && o >= nt) return false;
+    }
     if (!fold_partner.empty()) {
       if (fold_partner.size() != samples) return false;
       for (std::size_t i = 0; i < samples; ++i)  // a partner is a sample with no partner of its own

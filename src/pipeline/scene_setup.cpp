@@ -112,8 +112,10 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
         if (!sheet) {
           // The cage's guard (control/cage_guard.h), from the mesh posed at kGuardPoses times of the clip.
           std::vector<std::vector<Vec3f>> poses;
-          const std::size_t clip = static_cast<std::size_t>(std::max(skin->clip, 0));
-          const double duration = clip < skin->skin.clips.size() ? skin->skin.clips[clip].duration : 0.0;
+          // (No clip: no poses, so no guard; only the bind pose is tried.)
+          const double duration = skin->clip >= 0 && static_cast<std::size_t>(skin->clip) < skin->skin.clips.size()
+                                      ? skin->skin.clips[static_cast<std::size_t>(skin->clip)].duration
+                                      : 0.0;
           std::vector<io::Mat4f> K;
           control::PosedJoints joints;
           for (int k = 0; k < control::kGuardPoses && duration > 0.0; ++k) {
