@@ -69,7 +69,8 @@ struct AdaptiveParams {
   /// least this share of |u_c| (and at least gather_speed). Ours. With the approach at gather_speed alone (2.3 m/s
   /// on huesitos.fbx, whose limbs move at up to 32 m/s) the fluid a fast limb shed chased it for the whole run: up
   /// to 30 % of the fluid outside from 4 to 14 s; at 1, 99.34 % or more inside from 1 s on (bench/RESULTS.md,
-  /// "seventh part"). Static targets (u_c = 0) are not affected, nor is anything with follow = 0 (no chase at all). [0, 10]; 0 = the approach at gather_speed only.
+  /// "seventh part"). Static targets (u_c = 0) are not affected, nor is anything with follow = 0 (no chase at all).
+  /// [0, 10]; 0 = the approach at gather_speed only.
   float gather_chase = 1.0f;
 
   template <class S, class F>

@@ -21,7 +21,8 @@ Vec3f face_normal(const MeshAnchors& a, const std::vector<Vec3f>& posed, Index t
 }
 
 // The angle-weighted pseudo-normal of `feature` of posed triangle t (closest_feature's numbering): the sign of
-// (p − q)·n tells inside from outside for the closest point q of a closed mesh, on a face, an edge or a corner alike.
+// (p − q)·n tells inside from outside for the closest point q of a closed mesh, on a face, an edge or a corner
+// alike.
 Vec3f pseudo_normal(const MeshAnchors& a, const std::vector<Vec3f>& posed, Index t, int feature) {
   const Vec3f n = face_normal(a, posed, t);
   if (feature == 0) return n;
@@ -86,7 +87,8 @@ Vec3f closest_feature(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3
 }
 
 float posed_winding_number(const MeshAnchors& a, const std::vector<Vec3f>& posed, const Vec3f& p) {
-  // Van Oosterom & Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|), per outward triangle.
+  // Van Oosterom & Strackee, per outward triangle:
+  //   tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
   // In float: only which side of ½ it is on matters, and a fold's samples are not on the surface.
   float sum = 0.0f;
   for (std::size_t t = 0; t < a.mesh.triangles.size(); ++t) {
@@ -139,7 +141,8 @@ Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std
   for (std::uint32_t k = a.guard_begin[i]; k < a.guard_begin[i + 1] && !fold; ++k) {
     const Index t = a.guard_triangle[k];
     const Vec3f n = face_normal(a, posed, t);
-    for (const Index o : a.across[t]) fold = fold || (o != kInvalidIndex && n.dot(face_normal(a, posed, o)) < kFoldCosine);
+    for (const Index o : a.across[t])
+      fold = fold || (o != kInvalidIndex && n.dot(face_normal(a, posed, o)) < kFoldCosine);
   }
   if (!fold || posed_winding_number(a, posed, y) > 0.5f) return y;
   // In a fold's pocket: towards its partner, deep in the same part and inside at every pose the clip was tried at,
@@ -161,7 +164,8 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   for (const auto& p : poses)
     if (p.size() != nv) return param_error("a pose for a cage's guard does not match its vertices");
   if (!(spacing > 0.0f) || !std::isfinite(spacing)) return param_error("a cage's guard needs a positive spacing");
-  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();  // place(): the cage alone
+  // From here until the guard is built, place() is the cage alone.
+  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();
 
   // Orientation: the field keeps each triangle outward (flipping a file's inconsistent patches). One it dropped (zero
   // area at bind) gets 0: no normal, and no share of the winding number, should a pose open it up.
@@ -247,10 +251,12 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   // the winding number though inside by its nearest triangle, and easing along that triangle cannot leave it. A
   // sample that ends outside at one of the poses is given a partner: the nearest sample at least kFoldPartnerDepth
   // spacings deep at bind that is inside at every pose; posed and outside, it is moved towards its partner.
+  std::vector<Vec3f> at_bind(ns);  // guarded: placed as posing will place them
   std::vector<std::uint8_t> out(ns, 0), deep(ns, 0);
   core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
-    deep[i] = -bind.signed_distance(a.place(i, a.mesh.vertices)) >= kFoldPartnerDepth * spacing;
+    at_bind[i] = a.place(i, a.mesh.vertices);
+    deep[i] = -bind.signed_distance(at_bind[i]) >= kFoldPartnerDepth * spacing;
   });
   for (const auto& p : poses) {
     FF_TRY(sampling::MeshField field, bind.moved(p));
@@ -262,8 +268,6 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
       deep[i] = 0;  // a partner is inside at every pose
     });
   }
-  std::vector<Vec3f> at_bind(ns);
-  for (std::size_t i = 0; i < ns; ++i) at_bind[i] = a.place(i, a.mesh.vertices);
   std::vector<Index> partner(ns, kInvalidIndex);
   core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
@@ -271,9 +275,11 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
     float best = std::numeric_limits<float>::infinity();
     for (std::size_t j = 0; j < ns; ++j)
       if (deep[j] && !out[j])
-        if (const float d2 = (at_bind[j] - at_bind[i]).squaredNorm(); d2 < best) best = d2, partner[i] = static_cast<Index>(j);
+        if (const float d2 = (at_bind[j] - at_bind[i]).squaredNorm(); d2 < best)
+          best = d2, partner[i] = static_cast<Index>(j);
   });
-  stats.folded = static_cast<std::size_t>(std::count_if(partner.begin(), partner.end(), [](Index j) { return j != kInvalidIndex; }));
+  stats.folded = static_cast<std::size_t>(
+      std::count_if(partner.begin(), partner.end(), [](Index j) { return j != kInvalidIndex; }));
   if (stats.folded > 0) a.fold_partner = std::move(partner);
   return stats;
 }

@@ -16,9 +16,10 @@
 //   φ(d) = m² / (2m − d),   d < m
 // which equals d and has slope 1 at d = m (so posing stays smooth), and stays positive however far out it was
 // (0.16 d_c for a sample 0.55 d_c out, m = 0.5 d_c). m is the sample's bind depth, within [kMinGuardDepth,
-// kGuardBand] spacings, so at the bind pose, of the samples inside the bind mesh, only those closer than kMinGuardDepth
-// to the surface move (inward, by less than that). A larger least depth pushes samples on a thin edge of the mesh through its other side (0.25 d_c:
-// 1-8 of huesitos' 4017 samples out at clip times where 0.1 d_c keeps all in).
+// kGuardBand] spacings, so at the bind pose, of the samples inside the bind mesh, only those closer than
+// kMinGuardDepth to the surface move (inward, by less than that). A larger least depth pushes samples on a thin edge
+// of the mesh through its other side (0.25 d_c: 1-8 of huesitos' 4017 samples out at clip times where 0.1 d_c keeps
+// all in).
 //
 // Folds. Where the pose folds the mesh over itself (linear blend skinning crushes huesitos' bends so that three of its
 // triangles turn inside out at t = 0.39 s), the fold's pocket is outside by the winding number though inside by its
@@ -81,7 +82,8 @@ Vec3f keep_inside(const MeshAnchors& anchors, std::size_t i, const Vec3f& x, con
 float posed_winding_number(const MeshAnchors& a, const std::vector<Vec3f>& posed, const Vec3f& p);
 
 /// The point of triangle (a, b, c) closest to p, and which feature it lies on: 0 the face, 1–3 the edges ab, bc, ca,
-/// 4–6 the corners a, b, c (Ericson, "Real-Time Collision Detection" §5.1.5; a degenerate triangle: a corner or edge).
+/// 4–6 the corners a, b, c (Ericson, "Real-Time Collision Detection" §5.1.5; a degenerate triangle: the closest
+/// point of its edges as segments).
 Vec3f closest_feature(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, int& feature);
 
 }  // namespace ff::control

@@ -138,14 +138,20 @@ TEST(CageGuard, TheGuardedCageKeepsTheBentBarsSamplesInside) {
   EXPECT_LT(step_guarded, 3.0f * step_cage);
 }
 
+// The bar's field and a cage of one sample in it, for the tests that need only the mesh.
+struct OneSample {
+  Bent s;
+  Result<sampling::MeshField> field = sampling::MeshField::build(s.bar);
+  Result<MeshAnchors> cage = anchor_to_cage(s.bar, s.skin.joints, s.skin.weights, {Vec3f(0.05f, 0.5f, 0.0f)}, 1000);
+};
+
 // The exact winding number that a fold's samples are checked by, against the field's (in double) on the bent bar.
 TEST(CageGuard, ThePosedWindingNumberIsTheFieldsOnTheBentBar) {
-  Bent s;
-  auto field = sampling::MeshField::build(s.bar);
-  ASSERT_TRUE(field.has_value());
-  s.samples = {Vec3f(0.05f, 0.5f, 0.0f)};
-  auto cage = anchor_to_cage(s.bar, s.skin.joints, s.skin.weights, s.samples, 1000);
-  ASSERT_TRUE(cage.has_value());
+  OneSample one;
+  ASSERT_TRUE(one.field.has_value() && one.cage.has_value());
+  const Bent& s = one.s;
+  auto& field = one.field;
+  auto& cage = one.cage;
   std::vector<std::vector<Vec3f>> poses(1);
   cage->pose_vertices(bend(s.skin, 1.0), poses[0]);
   ASSERT_TRUE(guard_cage(*cage, *field, poses, s.spacing).has_value());
@@ -167,12 +173,11 @@ TEST(CageGuard, ThePosedWindingNumberIsTheFieldsOnTheBentBar) {
 }
 
 TEST(CageGuard, RefusesWhatDoesNotMatch) {
-  Bent s;
-  auto field = sampling::MeshField::build(s.bar);
-  ASSERT_TRUE(field.has_value());
-  s.samples = {Vec3f(0.05f, 0.5f, 0.0f)};
-  auto cage = anchor_to_cage(s.bar, s.skin.joints, s.skin.weights, s.samples, 1000);
-  ASSERT_TRUE(cage.has_value());
+  OneSample one;
+  ASSERT_TRUE(one.field.has_value() && one.cage.has_value());
+  const Bent& s = one.s;
+  auto& field = one.field;
+  auto& cage = one.cage;
   std::vector<std::vector<Vec3f>> wrong{std::vector<Vec3f>(3, Vec3f::Zero())};
   EXPECT_FALSE(guard_cage(*cage, *field, wrong, s.spacing).has_value());
   EXPECT_FALSE(guard_cage(*cage, *field, {}, 0.0f).has_value());
