@@ -53,7 +53,8 @@ Result<TargetShape> TargetShape::build(const io::TriangleMesh& mesh, std::span<c
   TargetShape shape;
   shape.sdf_ = std::make_shared<const sampling::SdfGrid>(std::move(grid));
   shape.grid_ = core::PointGrid(controls, d, box);
-  shape.controls_ = core::PointTree(controls);
+  shape.tree_ = std::make_shared<LazyTree>();
+  shape.sample_count_ = controls.size();
   shape.box_ = box;
   shape.diagonal_ = diagonal;
   shape.control_spacing_ = d;
@@ -78,7 +79,8 @@ Result<TargetShape> TargetShape::posed(const TargetShape& bind, sampling::MeshFi
   TargetShape shape;
   shape.field_ = std::make_shared<const sampling::MeshField>(std::move(posed_field));
   shape.grid_ = core::PointGrid(posed_controls, bind.control_spacing_, box);
-  shape.controls_ = core::PointTree(posed_controls);
+  shape.tree_ = std::make_shared<LazyTree>();
+  shape.sample_count_ = posed_controls.size();
   shape.box_ = box;
   shape.diagonal_ = diagonal;
   shape.control_spacing_ = bind.control_spacing_;
@@ -110,12 +112,23 @@ TargetShape::Where TargetShape::classify(const Vec3f& p, float r) const {
 
 float TargetShape::nearest_sample_distance(const Vec3f& rest_point) const {
   const float d2 = grid_.nearest2(rest_point);
-  return std::sqrt(std::isnan(d2) ? controls_.nearest(rest_point).distance2 : d2);
+  return std::sqrt(std::isnan(d2) ? tree().nearest(rest_point).distance2 : d2);
+}
+
+const core::PointTree& TargetShape::tree() const {
+  // The grid holds every sample (its region is their box), in cell order: the same set.
+  assert(grid_.complete());
+  std::call_once(tree_->once, [&] {
+    tree_->tree = core::PointTree(grid_.points());
+    tree_->built.store(true, std::memory_order_release);
+  });
+  return tree_->tree;
 }
 
 std::size_t TargetShape::bytes() const {
-  return sizeof(*this) - sizeof(grid_) - sizeof(controls_) + (sdf_ ? sdf_->bytes() : 0) +
-         (field_ ? field_->bytes() : 0) + grid_.bytes() + controls_.bytes();
+  const bool tree = tree_ && tree_->built.load(std::memory_order_acquire);
+  return sizeof(*this) - sizeof(grid_) + (sdf_ ? sdf_->bytes() : 0) + (field_ ? field_->bytes() : 0) + grid_.bytes() +
+         (tree ? sizeof(LazyTree) + tree_->tree.bytes() : 0);
 }
 
 FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,

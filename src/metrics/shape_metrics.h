@@ -25,16 +25,19 @@
 
 #include <Eigen/Geometry>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
 namespace ff::metrics {
 
 /// One target's shape, built once: its control samples (rest frame) in a grid of cell d_c and a tree (exact
-/// nearest-sample distances, near and far), and the signed distance of its rest-frame mesh on a grid.
+/// nearest-sample distances, near and far; the tree is built on the first query the grid cannot answer, which a
+/// formed frame seldom has), and the signed distance of its rest-frame mesh on a grid.
 /// Immutable after build(); queries are thread-safe.
 class TargetShape {
  public:
@@ -49,8 +52,9 @@ class TargetShape {
   /// A skinned target's shape at one pose, cheap enough for every measured frame: the samples posed
   /// (`posed_controls`, in the order `bind` was built with) give the grid, tree, box and L, and the signed distance is
   /// the posed mesh's own (`posed_field`: the bind mesh's field moved to the posed vertices, MeshField::moved),
-  /// queried exactly (closest triangle and winding number through its BVH) instead of on a grid. Rebuilding the posed
-  /// mesh's SDF grid as build() does costs ~0.5–2 s a frame for the character. `bind` gives d_c and whether the
+  /// queried exactly (closest triangle, and inside by a ray's crossings when the mesh is closed, else by the winding
+  /// number, through its BVH) instead of on a grid. Rebuilding the posed mesh's SDF grid as build() does costs
+  /// ~0.5–2 s a frame for the character. `bind` gives d_c and whether the
   /// target is a sheet. Errors: Input for a size mismatch or a non-finite sample.
   static Result<TargetShape> posed(const TargetShape& bind, sampling::MeshField posed_field,
                                    std::span<const Vec3f> posed_controls);
@@ -66,9 +70,8 @@ class TargetShape {
   /// (a winding number of ±1/2 either side of an open sheet).
   float signed_distance(const Vec3f& rest_point) const;
   /// What measure() counts a point (rest frame) as: inside (signed distance ≤ r) and splash (> 2r), the same answers
-  /// as testing signed_distance(p), and what measure() uses for a posed shape, where it is cheaper: the winding number
-  /// alone settles a point inside the mesh (bench_mesh_field: 2.7× the rate of a signed distance), and a point outside
-  /// needs only the surface within 2r. NaN: neither.
+  /// as testing signed_distance(p), and what measure() uses for a posed shape, where it is cheaper: MeshField::inside()
+  /// alone settles a point inside the mesh, and a point outside needs only the surface within 2r. NaN: neither.
   struct Where {
     bool inside = false, splash = false;
   };
@@ -85,8 +88,8 @@ class TargetShape {
   /// The axis-aligned bounding box of the control samples (rest frame).
   const Aabb& sample_bounds() const { return box_; }
   float control_spacing() const { return control_spacing_; }
-  std::size_t sample_count() const { return controls_.size(); }
-  /// Bytes held (SDF values, the samples' grid and tree).
+  std::size_t sample_count() const { return sample_count_; }
+  /// Bytes held (SDF values, the samples' grid, their tree once built).
   std::size_t bytes() const;
 
   /// The control samples in cell order (their grid), for measure().
@@ -98,8 +101,16 @@ class TargetShape {
   TargetShape() = default;
   std::shared_ptr<const sampling::SdfGrid> sdf_;         // bind (built) shapes only
   std::shared_ptr<const sampling::MeshField> field_;     // posed shapes only: the posed mesh
+  // The samples' tree, built once when first needed (any thread; std::call_once), shared by copies.
+  struct LazyTree {
+    std::once_flag once;
+    std::atomic<bool> built{false};
+    core::PointTree tree;
+  };
+  const core::PointTree& tree() const;
   core::PointGrid grid_;
-  core::PointTree controls_;
+  std::shared_ptr<LazyTree> tree_;
+  std::size_t sample_count_ = 0;
   Aabb box_;
   bool sheet_ = false;
   float diagonal_ = 0.0f;

@@ -197,7 +197,8 @@ SkinnedPose skin_pose(const TargetShapes::Skinned& sk, const control::PosedJoint
 Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& sk,
                                          const control::Pose& pose, double time) {
   SkinnedPose posed = skin_pose(sk, joints_at(sk, time, sk.skin->spec.skinning), &pose);
-  FF_TRY(sampling::MeshField field, sk.bind_field->moved(posed.vertices));
+  // Measuring asks the posed mesh inside() and closest() only: a closed one skips the far field (MeshField::moved).
+  FF_TRY(sampling::MeshField field, sk.bind_field->moved(posed.vertices, /*far_field=*/false));
   return metrics::TargetShape::posed(bind, std::move(field), posed.samples);
 }
 

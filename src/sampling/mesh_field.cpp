@@ -25,11 +25,13 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cstring>
 #include <cassert>
 #include <cmath>
 #include <numbers>
 #include <numeric>
 #include <tuple>
+#include <unordered_map>
 
 namespace ff::sampling {
 namespace {
@@ -250,6 +252,58 @@ double hole_area(const io::TriangleMesh& mesh, const std::vector<Tri>& tris, con
   return total;
 }
 
+// ---- closedness ----------------------------------------------------------------------------------------
+
+// Per vertex, the first vertex at exactly its position (−0 and +0 are one position): split vertices (a UV or
+// normal seam) are one point of the surface.
+std::vector<Index> weld_by_position(std::span<const Vec3f> vertices) {
+  struct Key {
+    std::uint32_t x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      return (std::size_t{k.x} * 0x9E3779B97F4A7C15ull) ^ (std::size_t{k.y} * 0xC2B2AE3D27D4EB4Full) ^ k.z;
+    }
+  };
+  auto bits = [](float v) {
+    const float w = v + 0.0f;  // −0 → +0
+    std::uint32_t b;
+    std::memcpy(&b, &w, sizeof b);
+    return b;
+  };
+  std::unordered_map<Key, Index, Hash> first;
+  first.reserve(vertices.size());
+  std::vector<Index> weld(vertices.size());
+  for (std::size_t v = 0; v < vertices.size(); ++v) {
+    const Key k{bits(vertices[v].x()), bits(vertices[v].y()), bits(vertices[v].z())};
+    weld[v] = first.try_emplace(k, static_cast<Index>(v)).first->second;
+  }
+  return weld;
+}
+
+// Whether the triangles, their corners welded, walk every edge as often one way as the other.
+bool edges_balanced(const std::vector<Tri>& tris, const std::vector<Index>& weld) {
+  std::vector<std::pair<std::uint64_t, int>> edges;
+  edges.reserve(3 * tris.size());
+  for (const Tri& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = weld[t[k]], b = weld[t[(k + 1) % 3]];
+      if (a == b) return false;  // a corner repeated by the weld: no sound edge to count
+      const auto lo = std::uint64_t{std::min(a, b)}, hi = std::uint64_t{std::max(a, b)};
+      edges.push_back({(lo << 32) | hi, a < b ? 1 : -1});
+    }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size();) {
+    int sum = 0;
+    std::size_t j = i;
+    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) sum += edges[j].second;
+    if (sum != 0) return false;
+    i = j;
+  }
+  return true;
+}
+
 // ---- exact per-triangle kernels ------------------------------------------------------------------------
 
 double solid_angle(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
@@ -360,11 +414,15 @@ Result<MeshField> MeshField::build(const io::TriangleMesh& mesh) {
   }
   f.encloses_volume_ = f.stats_.hole_area <= kMaxHoleFraction * f.area_ && f.volume_ > 1e-6 * std::pow(f.area_, 1.5);
   f.vertex_count_ = mesh.vertices.size();
+  {  // edges are matched across seams split by index (by position)
+    std::vector<Index> weld = weld_by_position(mesh.vertices);
+    if (edges_balanced(tris, weld)) f.closed_ = true, f.weld_ = std::move(weld);
+  }
   f.build_bvh(std::move(geometry), std::move(source), std::move(tris));
   return f;
 }
 
-Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices) const {
+Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices, bool far_field) const {
   if (vertices.size() != vertex_count_)
     return input_error(fmt::format("moved mesh has {} vertices, its field was built with {}", vertices.size(), vertex_count_));
   for (std::size_t v = 0; v < vertices.size(); ++v)
@@ -373,6 +431,12 @@ Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices) const {
   f.volume_ = volume_, f.encloses_volume_ = encloses_volume_, f.stats_ = stats_;
   f.source_ = source_, f.bvh_index_ = bvh_index_, f.corners_ = corners_, f.vertex_count_ = vertex_count_;
   f.nodes_ = nodes_;
+  // Closed only while every welded vertex still sits exactly on its first: a seam the move opens is a crack a
+  // ray could pass through.
+  f.closed_ = closed_;
+  for (std::size_t v = 0; f.closed_ && v < weld_.size(); ++v)
+    f.closed_ = weld_[v] == v || vertices[v] == vertices[weld_[v]];
+  if (f.closed_) f.weld_ = weld_;
   f.tris_.resize(tris_.size());
   f.normal_.resize(tris_.size());
   for (std::size_t k = 0; k < tris_.size(); ++k) {
@@ -399,7 +463,7 @@ Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices) const {
     }
     n.lo = box.min, n.hi = box.max;
   }
-  f.build_expansions(range);
+  if (far_field || !f.closed_) f.build_expansions(range);
   return f;
 }
 
@@ -600,6 +664,7 @@ float MeshField::far_solid_angle(const Expansion& e, const Vec3f& r, float l2) {
 }
 
 float MeshField::winding_number(const Vec3f& p) const {
+  if (expansion_.empty()) return static_cast<float>(winding_number_exact(p));  // moved() without the far field
   const Vec3d q = to_d(p);
   double omega = 0.0;
   Index stack[kStackSize];
@@ -624,6 +689,76 @@ float MeshField::winding_number(const Vec3f& p) const {
     stack[top++] = node.first + 1;
   }
   return static_cast<float>(omega / kFourPi);
+}
+
+bool MeshField::inside(const Vec3f& p) const {
+  if (closed_)
+    if (const std::optional<int> w = ray_winding(p)) return *w > 0;
+  return winding_number(p) > 0.5f;
+}
+
+std::optional<int> MeshField::ray_winding(const Vec3f& p) const {
+  if (!closed_ || !p.allFinite()) return std::nullopt;
+  // The six axis directions, the one that leaves the bounds soonest first: it meets the fewest nodes.
+  std::array<std::pair<float, int>, 6> order;
+  for (int a = 0; a < 3; ++a) {
+    order[2 * a] = {bounds_.max[a] - p[a], 2 * a};          // +axis
+    order[2 * a + 1] = {p[a] - bounds_.min[a], 2 * a + 1};  // −axis
+  }
+  std::sort(order.begin(), order.end());
+  Index stack[kStackSize];
+  for (const auto& [unused, dir] : order) {
+    const int a = dir / 2, u = (a + 1) % 3, v = (a + 2) % 3;  // (a, u, v) cyclic: the projection keeps handedness
+    const bool forward = dir % 2 == 0;
+    int winding = 0;
+    bool grazed = false;
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0 && !grazed) {
+      const Node& node = nodes_[stack[--top]];
+      // The ray is the half-line {p + s·e_a}: a box it meets holds p's other two coordinates.
+      if (p[u] < node.lo[u] || p[u] > node.hi[u] || p[v] < node.lo[v] || p[v] > node.hi[v]) continue;
+      if (forward ? node.hi[a] < p[a] : node.lo[a] > p[a]) continue;
+      if (node.count == 0) {
+        stack[top++] = node.first;
+        stack[top++] = node.first + 1;
+        continue;
+      }
+      for (Index t = node.first; t < node.first + node.count; ++t) {
+        const Triangle& tr = tris_[t];
+        const Vec3f A = tr.a - p, B = tr.b - p, C = tr.c - p;
+        // Edge functions of the projected triangle about the ray (the origin): each is the 2D cross product of
+        // its edge's two corners, products of floats exact in double and one rounding, so it is antisymmetric
+        // in the corners whatever the compiler contracts.
+        auto edge = [&](const Vec3f& x, const Vec3f& y) {
+          return double(x[u]) * double(y[v]) - double(x[v]) * double(y[u]);
+        };
+        const double e0 = edge(B, C), e1 = edge(C, A), e2 = edge(A, B);
+        const bool pos = e0 > 0 || e1 > 0 || e2 > 0, neg = e0 < 0 || e1 < 0 || e2 < 0;
+        if (pos && neg) continue;  // the ray's line passes beside the triangle
+        const double det = e0 + e1 + e2;  // = the triangle's normal · e_a, twice its area (signed)
+        if (det == 0.0) {  // every edge function zero: the projection is a segment or point through the ray
+          grazed = true;
+          break;
+        }
+        // The hit's offset from p along e_a: the barycentric mean of the corners' a-coordinates.
+        const double along = (e0 * A[a] + e1 * B[a] + e2 * C[a]) / det;
+        if (along == 0.0) {  // p on the triangle
+          grazed = true;
+          break;
+        }
+        if (forward ? along < 0.0 : along > 0.0) continue;  // behind p
+        if (e0 == 0 || e1 == 0 || e2 == 0) {  // through an edge or a corner
+          grazed = true;
+          break;
+        }
+        // The surface leaves towards the ray (its normal along the ray) where p is inside: +1.
+        winding += (det > 0.0) == forward ? 1 : -1;
+      }
+    }
+    if (!grazed) return winding;
+  }
+  return std::nullopt;
 }
 
 double MeshField::winding_number_exact(const Vec3f& p) const {

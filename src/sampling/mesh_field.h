@@ -20,6 +20,10 @@
 // origin does not matter, for an open one (a cap, a sphere with a hole) that centre is the natural inside.
 // Open and non-manifold meshes are kept as they are otherwise.
 //
+// Closed meshes (closed(): every edge walked as often each way, seams welded by position) are asked inside() by a
+// ray instead: the signed count of its crossings is their winding number exactly, and one ray through the BVH's
+// boxes is ~10× cheaper than the hierarchical sum, which a point among many overlapping parts must open deeply.
+//
 // Closest point: the same BVH (node boxes), nearest child first, exact point-triangle distance in the leaves.
 //
 // Determinism: build() is serial; every query is a pure function of the point, so the parallel batch queries
@@ -32,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -72,19 +77,38 @@ class MeshField {
   /// area, or a volume below 1e-6·area^1.5. Closed meshes and ones with small holes enclose a volume.
   bool encloses_volume() const { return encloses_volume_; }
   const MeshFieldStats& stats() const { return stats_; }
+  /// True when the kept, oriented triangles walk every edge as often one way as the other (vertices welded by
+  /// exact position): the surface then bounds its volume exactly (overlapping and nested closed parts included),
+  /// its winding number is an integer off the surface, and inside() counts it along a ray (ray_winding). An open
+  /// or holed mesh is not closed and keeps the generalized winding number. moved() keeps it only while the
+  /// vertices welded at build() still coincide.
+  bool closed() const { return closed_; }
 
   /// The same mesh moved: `vertices` replace the positions of the mesh given to build() (same count, same order), the
   /// triangles, their orientation and the BVH's tree are kept, and the node boxes, normals and far-field expansions
   /// are refitted. Every query stays exact (a looser tree costs time, not accuracy); ~6× cheaper than build() on the
   /// 6.8k-triangle demo character (what a skinned target's posed metrics do every frame). area() and bounds() are
   /// the moved mesh's; volume(), encloses_volume() and stats() stay build()'s. A triangle the move collapses to zero
-  /// area is kept and adds nothing. Errors (Input, one line): a different vertex count, a non-finite vertex.
-  Result<MeshField> moved(std::span<const Vec3f> vertices) const;
+  /// area is kept and adds nothing. `far_field` false skips the far-field expansions (most of the refit's time) when
+  /// the moved mesh is closed(), for callers that ask inside() and closest() only: there inside() counts rays, and
+  /// winding_number() falls back to the exact O(n) sum. Errors (Input, one line): a different vertex count, a
+  /// non-finite vertex.
+  Result<MeshField> moved(std::span<const Vec3f> vertices, bool far_field = true) const;
 
   /// Generalized winding number at `p` (1 inside, 0 outside a closed mesh; ~0.5 on the surface).
   float winding_number(const Vec3f& p) const;
-  /// winding_number(p) > 0.5.
-  bool inside(const Vec3f& p) const { return winding_number(p) > 0.5f; }
+  /// Whether p is inside: ray_winding(p) > 0 on a closed() mesh, where a ray answers; else winding_number(p) > 0.5.
+  /// Both agree off the surface of a closed mesh; the ray is exact, and 10× the rate of the hierarchical sum on the
+  /// bunny, 13× on 16 overlapping parts such as a skinned character's (bench_mesh_field, BM_Inside*).
+  bool inside(const Vec3f& p) const;
+  /// The winding number of a closed() mesh at p, exactly: the signed count of the surface's crossings along an
+  /// axis-aligned ray from p (+1 where the surface leaves towards the ray, −1 where it enters), the shortest
+  /// axis direction out of the bounds first. A crossing is decided by the signs of the three edge functions of
+  /// the triangle projected along the ray, each taken from the edge's two float vertices in double, so the two
+  /// triangles of an edge see exactly opposite values and a ray near an edge counts exactly one of them. A ray
+  /// that meets an edge, a vertex or the surface at p itself (a zero edge function or hit distance) is cast
+  /// along the next axis direction; nullopt when all six do so (p on the surface) or the mesh is not closed().
+  std::optional<int> ray_winding(const Vec3f& p) const;
 
   /// The closest surface point, the unit normal of its triangle (outward after orientation), the distance and
   /// the triangle's index in the mesh given to build().
@@ -163,6 +187,8 @@ class MeshField {
   std::vector<Index> bvh_index_;      // per input triangle: its BVH-order index (kInvalidIndex if dropped)
   std::vector<std::array<Index, 3>> corners_;  // per triangle (BVH order): its vertices in the input mesh, oriented
   std::size_t vertex_count_ = 0;               // of the input mesh (moved() must be given as many)
+  bool closed_ = false;                        // see closed()
+  std::vector<Index> weld_;  // closed_ only: per input vertex, the first vertex at its exact position
 };
 
 /// The point of triangle (a, b, c) closest to p (exact up to float rounding; safe on needle triangles).
