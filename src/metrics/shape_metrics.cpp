@@ -128,7 +128,7 @@ const core::PointTree& TargetShape::tree() const {
 std::size_t TargetShape::bytes() const {
   const bool tree = tree_ && tree_->built.load(std::memory_order_acquire);
   return sizeof(*this) - sizeof(grid_) + (sdf_ ? sdf_->bytes() : 0) + (field_ ? field_->bytes() : 0) + grid_.bytes() +
-         (tree ? sizeof(LazyTree) + tree_->tree.bytes() : 0);
+         (tree ? sizeof(LazyTree) - sizeof(core::PointTree) + tree_->tree.bytes() : 0);
 }
 
 FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,

@@ -89,7 +89,7 @@ class TargetShape {
   const Aabb& sample_bounds() const { return box_; }
   float control_spacing() const { return control_spacing_; }
   std::size_t sample_count() const { return sample_count_; }
-  /// Bytes held (SDF values, the samples' grid, their tree once built).
+  /// Bytes held (SDF values, the samples' grid, their tree once a query has built it).
   std::size_t bytes() const;
 
   /// The control samples in cell order (their grid), for measure().

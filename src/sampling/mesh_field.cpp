@@ -267,7 +267,7 @@ std::vector<Index> weld_by_position(std::span<const Vec3f> vertices) {
     }
   };
   auto bits = [](float v) {
-    const float w = v + 0.0f;  // −0 → +0
+    const float w = v == 0.0f ? 0.0f : v;  // −0 → +0
     std::uint32_t b;
     std::memcpy(&b, &w, sizeof b);
     return b;
@@ -416,7 +416,8 @@ Result<MeshField> MeshField::build(const io::TriangleMesh& mesh) {
   f.vertex_count_ = mesh.vertices.size();
   {  // edges are matched across seams split by index (by position)
     std::vector<Index> weld = weld_by_position(mesh.vertices);
-    if (edges_balanced(tris, weld)) f.closed_ = true, f.weld_ = std::move(weld);
+    if (edges_balanced(tris, weld))
+      f.closed_ = true, f.weld_ = std::make_shared<const std::vector<Index>>(std::move(weld));
   }
   f.build_bvh(std::move(geometry), std::move(source), std::move(tris));
   return f;
@@ -434,8 +435,8 @@ Result<MeshField> MeshField::moved(std::span<const Vec3f> vertices, bool far_fie
   // Closed only while every welded vertex still sits exactly on its first: a seam the move opens is a crack a
   // ray could pass through.
   f.closed_ = closed_;
-  for (std::size_t v = 0; f.closed_ && v < weld_.size(); ++v)
-    f.closed_ = weld_[v] == v || vertices[v] == vertices[weld_[v]];
+  for (std::size_t v = 0; f.closed_ && v < weld_->size(); ++v)
+    f.closed_ = (*weld_)[v] == v || vertices[v] == vertices[(*weld_)[v]];
   if (f.closed_) f.weld_ = weld_;
   f.tris_.resize(tris_.size());
   f.normal_.resize(tris_.size());
@@ -737,7 +738,9 @@ std::optional<int> MeshField::ray_winding(const Vec3f& p) const {
         const bool pos = e0 > 0 || e1 > 0 || e2 > 0, neg = e0 < 0 || e1 < 0 || e2 < 0;
         if (pos && neg) continue;  // the ray's line passes beside the triangle
         const double det = e0 + e1 + e2;  // = the triangle's normal · e_a, twice its area (signed)
-        if (det == 0.0) {  // every edge function zero: the projection is a segment or point through the ray
+        if (det == 0.0) {  // every edge function zero: the projection is a segment or point through the ray's line
+          const float lo = std::min({A[a], B[a], C[a]}), hi = std::max({A[a], B[a], C[a]});
+          if (forward ? hi < 0.0f : lo > 0.0f) continue;  // wholly behind p: the ray cannot meet it
           grazed = true;
           break;
         }
@@ -866,7 +869,8 @@ void MeshField::signed_distance(std::span<const Vec3f> p, std::span<float> out) 
 std::size_t MeshField::bytes() const {
   return sizeof(*this) + nodes_.capacity() * sizeof(Node) + expansion_.capacity() * sizeof(Expansion) +
          tris_.capacity() * sizeof(Triangle) + normal_.capacity() * sizeof(Vec3f) + source_.capacity() * sizeof(Index) +
-         bvh_index_.capacity() * sizeof(Index) + corners_.capacity() * sizeof(corners_[0]);
+         bvh_index_.capacity() * sizeof(Index) + corners_.capacity() * sizeof(corners_[0]) +
+         (weld_ ? weld_->capacity() * sizeof(Index) : 0);
 }
 
 // ---- ray parity ----------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -91,7 +92,8 @@ class MeshField {
   /// the moved mesh's; volume(), encloses_volume() and stats() stay build()'s. A triangle the move collapses to zero
   /// area is kept and adds nothing. `far_field` false skips the far-field expansions (most of the refit's time) when
   /// the moved mesh is closed(), for callers that ask inside() and closest() only: there inside() counts rays, and
-  /// winding_number() falls back to the exact O(n) sum. Errors (Input, one line): a different vertex count, a
+  /// winding_number() falls back to the exact O(n) sum (do not hand such a field to bulk winding-number users such
+  /// as SdfGrid::build). Errors (Input, one line): a different vertex count, a
   /// non-finite vertex.
   Result<MeshField> moved(std::span<const Vec3f> vertices, bool far_field = true) const;
 
@@ -101,13 +103,14 @@ class MeshField {
   /// Both agree off the surface of a closed mesh; the ray is exact, and 10× the rate of the hierarchical sum on the
   /// bunny, 13× on 16 overlapping parts such as a skinned character's (bench_mesh_field, BM_Inside*).
   bool inside(const Vec3f& p) const;
-  /// The winding number of a closed() mesh at p, exactly: the signed count of the surface's crossings along an
-  /// axis-aligned ray from p (+1 where the surface leaves towards the ray, −1 where it enters), the shortest
-  /// axis direction out of the bounds first. A crossing is decided by the signs of the three edge functions of
+  /// The winding number of a closed() mesh at p, exactly (for the mesh's float vertices; p within about an ulp of
+  /// the surface may read either side): the signed count of the surface's crossings along an axis-aligned ray from
+  /// p (+1 where the ray exits, the normal along it; −1 where it enters), the shortest axis direction out of the
+  /// bounds first. A crossing is decided by the signs of the three edge functions of
   /// the triangle projected along the ray, each taken from the edge's two float vertices in double, so the two
   /// triangles of an edge see exactly opposite values and a ray near an edge counts exactly one of them. A ray
-  /// that meets an edge, a vertex or the surface at p itself (a zero edge function or hit distance) is cast
-  /// along the next axis direction; nullopt when all six do so (p on the surface) or the mesh is not closed().
+  /// that meets an edge, a vertex, a face edge-on or the surface at p itself (a zero edge function or hit
+  /// distance) is cast along the next axis direction; nullopt when all six do so (p on the surface) or the mesh is not closed().
   std::optional<int> ray_winding(const Vec3f& p) const;
 
   /// The closest surface point, the unit normal of its triangle (outward after orientation), the distance and
@@ -188,7 +191,8 @@ class MeshField {
   std::vector<std::array<Index, 3>> corners_;  // per triangle (BVH order): its vertices in the input mesh, oriented
   std::size_t vertex_count_ = 0;               // of the input mesh (moved() must be given as many)
   bool closed_ = false;                        // see closed()
-  std::vector<Index> weld_;  // closed_ only: per input vertex, the first vertex at its exact position
+  // closed_ only: per input vertex, the first vertex at its exact position (shared by the moved copies)
+  std::shared_ptr<const std::vector<Index>> weld_;
 };
 
 /// The point of triangle (a, b, c) closest to p (exact up to float rounding; safe on needle triangles).

@@ -173,10 +173,24 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
       bare.guard_begin.clear();
       std::vector<Vec3f> v;
       bare.pose_vertices(joints, v);
-      std::size_t bare_kept = 0;
+      std::size_t bare_kept = 0, eased_kept = 0;
       for (std::size_t i = 0; i < sk.bind_samples.size(); ++i)
-        if (in_bind[i]) bare_kept += field->inside(bare.place(i, v));
-      std::printf("%s t=%.3f: the cage alone keeps %.2f %% inside\n", c.name.c_str(), time, 100.0 * double(bare_kept) / double(n_in));
+        if (in_bind[i]) {
+          bare_kept += field->inside(bare.place(i, v));
+          eased_kept += field->inside(sk.anchors->place(i, v, /*folds=*/false));
+        }
+      std::printf("%s t=%.3f: the cage alone keeps %.2f %% inside, eased in by its guard %.2f %%\n", c.name.c_str(), time,
+                  100.0 * double(bare_kept) / double(n_in), 100.0 * double(eased_kept) / double(n_in));
+      // The fold path: where huesitos folds (k = 1, 2), easing in alone leaves samples in the fold's pocket, and moving
+      // them towards their partners brings more of them in; elsewhere it moves none out.
+      if (c.name == "huesitos") {
+        EXPECT_FALSE(sk.anchors->fold_partner.empty());
+        if (k == 1 || k == 2) {
+          EXPECT_LT(eased_kept, kept) << "at t = " << time;
+        } else {
+          EXPECT_GE(kept, eased_kept) << "at t = " << time;
+        }
+      }
     }
     // Triangles the pose turns inside out (linear blend skinning folds a coarse mesh's crushed bend over itself): just
     // outside one the winding number is no longer below ½, or just inside no longer above, where at bind it was. The
