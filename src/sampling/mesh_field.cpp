@@ -284,20 +284,17 @@ std::vector<Index> weld_by_position(std::span<const Vec3f> vertices) {
 
 // Whether the triangles, their corners welded, walk every edge as often one way as the other.
 bool edges_balanced(const std::vector<Tri>& tris, const std::vector<Index>& weld) {
-  std::vector<std::pair<std::uint64_t, int>> edges;
-  edges.reserve(3 * tris.size());
-  for (const Tri& t : tris)
-    for (int k = 0; k < 3; ++k) {
-      const Index a = weld[t[k]], b = weld[t[(k + 1) % 3]];
-      if (a == b) return false;  // a corner repeated by the weld: no sound edge to count
-      const auto lo = std::uint64_t{std::min(a, b)}, hi = std::uint64_t{std::max(a, b)};
-      edges.push_back({(lo << 32) | hi, a < b ? 1 : -1});
-    }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t i = 0; i < edges.size();) {
+  std::vector<Tri> welded(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    for (int k = 0; k < 3; ++k) welded[t][k] = weld[tris[t][k]];
+    const Tri& w = welded[t];
+    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) return false;  // no sound edge to count
+  }
+  const std::vector<EdgeUse> uses = edge_uses(welded);
+  for (std::size_t i = 0; i < uses.size();) {
     int sum = 0;
     std::size_t j = i;
-    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) sum += edges[j].second;
+    for (; j < uses.size() && uses[j].lo == uses[i].lo && uses[j].hi == uses[i].hi; ++j) sum += uses[j].forward ? 1 : -1;
     if (sum != 0) return false;
     i = j;
   }
