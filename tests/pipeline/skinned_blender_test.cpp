@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <ostream>
 
 namespace ff::pipeline {
 namespace {
@@ -32,6 +33,10 @@ struct BlenderCase {
   float scale;
   double keep_inside;
 };
+
+// gtest prints a parameter without a printer as its raw bytes, heap addresses included, and ctest's test name
+// carries that print: the name changed with every build, so ctest's timing of the test was never found again.
+void PrintTo(const BlenderCase& c, std::ostream* os) { *os << c.name; }
 
 class SkinnedBlender : public ::testing::TestWithParam<BlenderCase> {};
 
