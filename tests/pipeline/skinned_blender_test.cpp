@@ -34,8 +34,7 @@ struct BlenderCase {
   double keep_inside;
 };
 
-// gtest prints a parameter without a printer as its raw bytes, heap addresses included, and ctest's test name
-// carries that print: the name changed with every build, so ctest's timing of the test was never found again.
+// A stable ctest name: printed as its name, not as raw bytes (why: PrintTo in tests/e2e/character_test.cpp).
 void PrintTo(const BlenderCase& c, std::ostream* os) { *os << c.name; }
 
 class SkinnedBlender : public ::testing::TestWithParam<BlenderCase> {};

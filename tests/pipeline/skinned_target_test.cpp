@@ -34,8 +34,7 @@ struct SkinnedCase {
   float sheet_tolerance = 0.01f;
 };
 
-// gtest prints a parameter without a printer as its raw bytes, heap addresses included, and ctest's test name
-// carries that print: the name changed with every build, so ctest's timing of the test was never found again.
+// A stable ctest name: printed as its name, not as raw bytes (why: PrintTo in tests/e2e/character_test.cpp).
 void PrintTo(const SkinnedCase& c, std::ostream* os) { *os << c.name; }
 
 fs::path character_glb() {
