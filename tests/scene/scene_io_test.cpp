@@ -1,5 +1,5 @@
 // The scene writer and the key table against the reader: one field list per struct drives all three, so a scene
-// written out reads back as the same scene, and the README's table of keys is what `fluidform keys` prints.
+// written out reads back as the same scene, and the table of keys in docs/scene-keys.md is what `fluidform keys` prints.
 #include "scene/scene.h"
 #include "support/test_support.h"
 
@@ -71,15 +71,16 @@ TEST(SceneKeys, EveryFieldHasARowAndTheReadmeShowsThem) {
                         "sampling.sparse.drop_boxes[].min", "controller.name", "controller.adaptive.alpha",
                         "controller.lcat.density", "output.frames"})
     EXPECT_TRUE(has(k)) << k;
-  std::ifstream in(test::source_dir() / "README.md");
+  std::ifstream in(test::source_dir() / "docs" / "scene-keys.md");
+  ASSERT_TRUE(in.is_open()) << "docs/scene-keys.md is missing";
   std::stringstream ss;
   ss << in.rdbuf();
-  const std::string readme = ss.str(), begin = "<!-- fluidform keys: begin -->\n", end = "<!-- fluidform keys: end -->";
-  const auto b = readme.find(begin), e = readme.find(end);
-  ASSERT_NE(b, std::string::npos);
-  ASSERT_NE(e, std::string::npos);
-  EXPECT_EQ(readme.substr(b + begin.size(), e - b - begin.size()), scene_keys_markdown())
-      << "README.md's table of scene keys is out of date: paste `fluidform keys` between its markers";
+  const std::string page = ss.str(), begin = "<!-- fluidform keys: begin -->\n", end = "<!-- fluidform keys: end -->";
+  const auto b = page.find(begin), e = page.find(end);
+  ASSERT_NE(b, std::string::npos) << "docs/scene-keys.md has no '<!-- fluidform keys: begin -->' line";
+  ASSERT_NE(e, std::string::npos) << "docs/scene-keys.md has no '<!-- fluidform keys: end -->' line";
+  EXPECT_EQ(page.substr(b + begin.size(), e - b - begin.size()), scene_keys_markdown())
+      << "docs/scene-keys.md's table of scene keys is out of date: paste `fluidform keys` between its markers";
 }
 
 TEST(SceneReader, FieldListErrors) {
