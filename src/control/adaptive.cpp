@@ -80,7 +80,7 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
   return c;
 }
 
-void AdaptiveController::set_target_pose(std::size_t target, const Pose& pose) { samples_.set_target_pose(target, pose); }
+void AdaptiveController::set_target_pose(std::size_t target, const pose::Pose& pose) { samples_.set_target_pose(target, pose); }
 
 // The bond masks hold a byte per group of four pairs, one bit per pair.
 template <class F>

@@ -21,7 +21,7 @@
 #include "control/control_targets.h"
 #include "control/nearest_seed_field.h"
 #include "control/steering.h"
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
 #include "core/kernels.h"
 #include "core/neighbor_grid.h"
 #include "sampling/control_set.h"
@@ -44,7 +44,7 @@ class AdaptiveController final : public sim::Controller, public Steerable {
 
   std::string_view name() const override { return "adaptive"; }
   /// Live steering (control/steering.h): the samples follow `pose` from the next sub-step on.
-  void set_target_pose(std::size_t target, const Pose& pose) override;
+  void set_target_pose(std::size_t target, const pose::Pose& pose) override;
   void begin_step(const sim::StepView& view, sim::ParticleSet& p) override;
   void add_accelerations(const sim::StepView& view, sim::ParticleSet& p) override;
   void correct_positions(const sim::StepView& view, sim::ParticleSet& p) override;

@@ -26,7 +26,7 @@ bool BaselineCore::update(double t_now, float dt) {
   return swapped;
 }
 
-void BaselineCore::set_target_pose(std::size_t t, const Pose& pose) { samples.set_target_pose(t, pose); }
+void BaselineCore::set_target_pose(std::size_t t, const pose::Pose& pose) { samples.set_target_pose(t, pose); }
 
 void BaselineCore::sample_to_fluid(const sim::ParticleSet& p, float r) {
   fluid_grid_.build(p.position);

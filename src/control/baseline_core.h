@@ -26,7 +26,7 @@ class BaselineCore {
   bool update(double time, float dt);
   /// Live steering (control/steering.h, the controllers forward to this): target `t` holds `pose` from the next
   /// update() on (ControlSamples keeps every target's rest pose, so a static target can start moving).
-  void set_target_pose(std::size_t t, const Pose& pose);
+  void set_target_pose(std::size_t t, const pose::Pose& pose);
   /// Sample → fluid pairs within r (near_fluid), on the fluid positions x; r ≤ the radius given to init.
   void sample_to_fluid(const sim::ParticleSet& p, float r);
   /// Fluid → sample pairs within r (near_samples), on the fluid positions x.

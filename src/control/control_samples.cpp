@@ -101,7 +101,7 @@ void ControlSamples::flatten() {
 // anchored to the posed mesh (control/mesh_anchors.h) are placed from its skinned vertices instead.
 // Their densities stay the bind pose's too (measured: see bench/RESULTS.md "Animated characters").
 void ControlSamples::pose(double time, float dt) {
-  std::vector<Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);
+  std::vector<pose::Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);
   for (std::size_t t = 0; t < motion_.size(); ++t) now[t] = motion_[t].at(time);
   for (std::size_t t = 0; t < next.size(); ++t) next[t] = motion_[t].at(time + dt);
   now_joints_.resize(skin_.size()), next_joints_.resize(skin_.size());
@@ -121,7 +121,7 @@ void ControlSamples::pose(double time, float dt) {
   // Where a sample is (world, no keyframed pose): placed from the posed mesh, or skinned by its own weights.
   // A sample moved out of a fold's pocket (control/cage_guard.h) jumps as it goes in and out of it: its velocity is
   // its motion without that move (measured on huesitos: with the jump in u_c, 17 % more sub-steps by the CFL rule).
-  const auto skinned_at = [&](std::size_t i, const PosedJoints& joints, const std::vector<Vec3f>& vertices, bool folds) {
+  const auto skinned_at = [&](std::size_t i, const pose::PosedJoints& joints, const std::vector<Vec3f>& vertices, bool folds) {
     const Index a = anchor_[i];
     return a != kInvalidIndex ? anchors_[target[i]]->place(a, vertices, folds)
                               : joints.apply(joints_[i], weights_[i], rest_position_[i]);
@@ -164,7 +164,7 @@ bool ControlSamples::update(double time, float dt) {
   return swapped;
 }
 
-void ControlSamples::set_target_pose(std::size_t t, const Pose& p) {
+void ControlSamples::set_target_pose(std::size_t t, const pose::Pose& p) {
   if (t >= motion_.size()) return;
   // The rest pose is kept from the flatten on, so a target that was static can start moving.
   motion_[t].live = p;

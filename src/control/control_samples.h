@@ -5,8 +5,8 @@
 // the boundary normals of eq. 16. `adaptive` and every baseline hold one, so they see the same samples at the same
 // pose and accept and reject the same scenes (validate_control_targets).
 #include "control/control_targets.h"
-#include "control/skinning.h"
-#include "control/target_motion.h"
+#include "pose/skinning.h"
+#include "pose/target_motion.h"
 #include "core/error.h"
 #include "core/types.h"
 
@@ -33,7 +33,7 @@ class ControlSamples {
   /// indices of the previous set are then invalid), moving targets are posed, and with velocities, u_c over `dt`.
   bool update(double time, float dt);
   /// Target `t` holds `pose` from the next update() on (live steering), replacing its keyframes.
-  void set_target_pose(std::size_t t, const Pose& pose);
+  void set_target_pose(std::size_t t, const pose::Pose& pose);
 
   std::size_t size() const { return position.size(); }
   std::size_t targets() const { return phases_.size(); }
@@ -68,18 +68,18 @@ class ControlSamples {
   std::vector<std::size_t> current_;             // per target: the phase in use
   std::vector<double> start_;
   std::vector<StrengthTrack> strength_;
-  std::vector<TargetMotion> motion_;
-  std::vector<std::shared_ptr<const TargetSkin>> skin_;  // per target, null: not skinned
+  std::vector<pose::TargetMotion> motion_;
+  std::vector<std::shared_ptr<const pose::TargetSkin>> skin_;  // per target, null: not skinned
   std::vector<std::vector<std::array<std::uint16_t, io::kMaxInfluences>>> target_joints_;  // per target, per sample
   std::vector<std::vector<std::array<float, io::kMaxInfluences>>> target_weights_;
   // Flattened like position: each sample's influences (zero weights for samples of unskinned targets or phases).
   std::vector<std::array<std::uint16_t, io::kMaxInfluences>> joints_;
   std::vector<std::array<float, io::kMaxInfluences>> weights_;
   std::vector<std::uint8_t> skinned_;  // per flattened sample: its target's current phase is skinned
-  std::vector<std::shared_ptr<const MeshAnchors>> anchors_;  // per target, null: posed by the samples' weights
+  std::vector<std::shared_ptr<const pose::MeshAnchors>> anchors_;  // per target, null: posed by the samples' weights
   std::vector<Index> anchor_;          // per flattened sample: its index in its target's anchors (or kInvalidIndex)
   std::vector<std::vector<Vec3f>> now_vertices_, next_vertices_;  // per anchored target, scratch of pose()
-  std::vector<PosedJoints> now_joints_, next_joints_;  // per target, scratch of pose()
+  std::vector<pose::PosedJoints> now_joints_, next_joints_;  // per target, scratch of pose()
   bool moving_ = false;
   double time_ = 0.0;
   std::vector<Vec3f> rest_position_, rest_normal_;  // the rest pose of position and normal (moving targets)

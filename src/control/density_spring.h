@@ -51,7 +51,7 @@ DensitySpringConfig density_spring_config(const P& params, std::string name) {
 class DensitySpringController final : public sim::Controller, public Steerable {
  public:
   /// Live steering (control/steering.h): the shared core moves the samples.
-  void set_target_pose(std::size_t t, const Pose& pose) override { harness_.set_target_pose(t, pose); }
+  void set_target_pose(std::size_t t, const pose::Pose& pose) override { harness_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<DensitySpringController>> create(std::vector<ControlTarget> targets,
                                                                  const ControlContext& ctx, DensitySpringConfig cfg);
   std::string_view name() const override { return cfg_.name; }

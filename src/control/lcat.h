@@ -38,7 +38,7 @@ struct LcatParams {
 class LcatController final : public sim::Controller, public Steerable {
  public:
   /// Live steering (control/steering.h): the shared core moves the samples.
-  void set_target_pose(std::size_t t, const Pose& pose) override { harness_.set_target_pose(t, pose); }
+  void set_target_pose(std::size_t t, const pose::Pose& pose) override { harness_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<LcatController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                         const LcatParams& params);
   std::string_view name() const override { return "lcat"; }

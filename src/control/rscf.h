@@ -32,7 +32,7 @@ struct RscfParams {
 class RscfController final : public sim::Controller, public Steerable {
  public:
   /// Live steering (control/steering.h): the shared core moves the samples.
-  void set_target_pose(std::size_t t, const Pose& pose) override { harness_.set_target_pose(t, pose); }
+  void set_target_pose(std::size_t t, const pose::Pose& pose) override { harness_.set_target_pose(t, pose); }
   static Result<std::unique_ptr<RscfController>> create(std::vector<ControlTarget> targets, const ControlContext& ctx,
                                                         const RscfParams& params);
   std::string_view name() const override { return "rscf"; }

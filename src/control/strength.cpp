@@ -1,6 +1,6 @@
 #include "control/strength.h"
 
-#include <fmt/format.h>
+#include "core/keys.h"
 
 namespace ff::control {
 
@@ -19,14 +19,7 @@ float StrengthTrack::at(double time) const {
 }
 
 Status StrengthTrack::validate(std::string_view path) const {
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    const auto p = fmt::format("{}.strength[{}]", path, k);
-    FF_CHECK(core::validate_fields(keys[k], p));
-    if (k > 0 && !(keys[k].time > keys[k - 1].time))
-      return param_error(fmt::format("{}.time = {} must be later than the key before it ({})", p, keys[k].time,
-                                     keys[k - 1].time));
-  }
-  return {};
+  return core::validate_keys(std::span<const StrengthKey>(keys), path, "strength", "key");
 }
 
 }  // namespace ff::control

@@ -16,6 +16,8 @@
 // (check_off_lines).
 #include "io/load_mesh.h"
 
+#include "core/rotation.h"
+
 #include "core/printable.h"
 #include "io/isolate.h"
 
@@ -37,7 +39,6 @@
 #include <exception>
 #include <fstream>
 #include <new>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -82,14 +83,6 @@ Error file_error(const fs::path& path, std::string_view reason) {
 std::string assimp_reason(const Assimp::Importer& importer, std::string_view fallback) {
   std::string reason = one_line(importer.GetErrorString());
   return reason.empty() ? std::string(fallback) : reason;
-}
-
-/// R = Rz * Ry * Rx from degrees, in double.
-Eigen::Matrix3d rotation(const Vec3f& deg) {
-  const Vec3d r = deg.cast<double>() * (std::numbers::pi / 180.0);
-  return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
 }
 
 bool finite(const aiVector3D& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -618,7 +611,7 @@ bool MeshTransform::is_identity() const {
 }
 
 Vec3f MeshTransform::apply(const Vec3f& p) const {
-  return (rotation(rotate_deg) * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>())
+  return (core::rotation_from_degrees(rotate_deg.cast<double>()) * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>())
       .cast<float>();
 }
 
@@ -668,7 +661,7 @@ std::string import_answer(const Result<TriangleMesh>& result, const MeshLoadStat
 }
 
 void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {
-  const Eigen::Matrix3d rs = rotation(t.rotate_deg) * t.scale.cast<double>().asDiagonal();
+  const Eigen::Matrix3d rs = core::rotation_from_degrees(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
   const Vec3d shift = t.translate.cast<double>();
   for (auto& v : mesh.vertices) v = (rs * v.cast<double>() + shift).cast<float>();
   // A mirror (an odd number of negative scales, det < 0) turns every triangle inside out: reversing the winding

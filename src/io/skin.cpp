@@ -9,6 +9,7 @@
 #include "io/skin.h"
 
 #include "core/point_tree.h"
+#include "core/rotation.h"
 #include "io/isolate.h"
 
 #include <assimp/Importer.hpp>
@@ -20,6 +21,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <exception>
@@ -91,7 +93,7 @@ Result<std::optional<Skin>> load_skin_impl(const fs::path& path, const TriangleM
   Skin skin;
   skin.nodes = f.nodes;
   std::vector<Mat4f> rest;
-  skin.global_matrices(-1, 0.0, rest);
+  skin.rest_matrices(rest);
   const Mat4f T = transform_matrix(transform);
 
   // Joints: one per (node, inverse bind) pair, shared by meshes that agree on it.
@@ -378,6 +380,44 @@ Result<std::optional<Skin>> decode_skin(const fs::path& path, std::string_view b
 }
 
 }  // namespace
+
+Mat4f trs(const Vec3f& t, const Quatf& r, const Vec3f& s) {
+  Mat4f m = Mat4f::Identity();
+  m.topLeftCorner<3, 3>() = r.normalized().toRotationMatrix() * s.asDiagonal();
+  m.topRightCorner<3, 1>() = t;
+  return m;
+}
+
+Mat4f SkinNode::local() const { return trs(translation, rotation, scale); }
+
+void Skin::rest_matrices(std::vector<Mat4f>& out) const {
+  out.resize(nodes.size());
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    const Mat4f local = nodes[n].local();
+    out[n] = nodes[n].parent >= 0 ? Mat4f(out[static_cast<std::size_t>(nodes[n].parent)] * local) : local;
+  }
+}
+
+Result<std::size_t> Skin::find_clip(const std::string& name) const {
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    if (clips[c].name == name) return c;
+  std::size_t index = 0;
+  const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), index);
+  if (ec == std::errc() && end == name.data() + name.size() && index < clips.size()) return index;
+  std::string there;
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    there += fmt::format("{}{} '{}'", c ? ", " : "", c, clips[c].name);
+  return input_error(fmt::format("no animation clip '{}' (the file has {})", name,
+                                 clips.empty() ? std::string("none") : there));
+}
+
+Mat4f transform_matrix(const MeshTransform& t) {
+  // As MeshTransform::apply: R = Rz · Ry · Rx from degrees (core/rotation.h), in double.
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = core::rotation_from_degrees(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
+  m.topRightCorner<3, 1>() = t.translate.cast<double>();
+  return m.cast<float>();
+}
 
 Result<std::optional<Skin>> load_skin(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform,
                                       bool isolate) {

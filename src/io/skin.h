@@ -72,17 +72,12 @@ struct Skin {
 
   /// The clip named `name`, or by index when `name` is a whole number; an Input error naming the clips there are.
   Result<std::size_t> find_clip(const std::string& name) const;
-  /// Every node's global matrix (file scene space) with clip `clip` at time `t` (s, clamped to [0, duration]);
-  /// clip −1 is the rest pose. Keys are interpolated linearly (rotations by slerp).
-  void global_matrices(int clip, double t, std::vector<Mat4f>& out) const;
-  /// Skinning matrices G_{node(j)}(t) · inverse_bind[j] per joint (file scene space).
-  void joint_matrices(int clip, double t, std::vector<Mat4f>& out) const;
+  /// Every node's global matrix (file scene space) at the rest pose (no clip). A clip's poses are pose/skin_eval.h's.
+  void rest_matrices(std::vector<Mat4f>& out) const;
 };
 
-/// `clip` played forwards and then backwards, as one clip of twice its duration named "NAME pingpong" ("clip
-/// pingpong" for a clip without a name): each key at
-/// time t is kept and mirrored to 2·duration − t. Looping it never jumps, as control::ClipWrap::PingPong plays.
-AnimationClip pingpong_clip(const AnimationClip& clip);
+/// T · R · S: a node's local matrix from its translation, rotation (normalised here) and scale.
+Mat4f trs(const Vec3f& t, const Quatf& r, const Vec3f& s);
 
 /// T of a MeshTransform as a matrix: x' = R · (scale ⊙ x) + translate.
 Mat4f transform_matrix(const MeshTransform& t);

@@ -1,6 +1,7 @@
 // The rigged GLB (io/write_rigged_glb.h): skeleton, skin, clips and the bind-pose mesh in one glTF 2.0 binary.
 #include "io/write_rigged_glb.h"
 
+#include "core/rotation.h"
 #include "io/atomic_file.h"
 #include "io/glb_builder.h"
 #include "io/write_mesh.h"
@@ -10,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 
 namespace ff::io {
@@ -27,7 +27,7 @@ json quat(const Quatf& q) {
   return {n.x(), n.y(), n.z(), n.w()};  // glTF: x, y, z, w
 }
 
-// The interpolation of Skin::global_matrices (io/skin_pose.cpp), for keys made at times the file has none
+// The interpolation of pose::global_matrices (pose/skin_eval.cpp), for keys made at times the file has none
 // (a clip's start and end).
 Vec3f lerp_value(const Vec3f& a, const Vec3f& b, float u) { return (1.0f - u) * a + u * b; }
 Quatf lerp_value(const Quatf& a, const Quatf& b, float u) { return a.slerp(u, b); }
@@ -149,10 +149,7 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
     if (!v.allFinite()) return input_error("rigged glb: the mesh has a non-finite vertex");
 
   // T and its inverse, in double (MeshTransform::apply's R = Rz · Ry · Rx).
-  const Vec3d rad = transform.rotate_deg.cast<double>() * (std::numbers::pi / 180.0);
-  const Eigen::Matrix3d rot = (Eigen::AngleAxisd(rad.z(), Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(rad.y(), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(rad.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
+  const Eigen::Matrix3d rot = core::rotation_from_degrees(transform.rotate_deg.cast<double>());
   const Eigen::Matrix3d lin = rot * transform.scale.cast<double>().asDiagonal();
   const Eigen::Matrix3d lin_inv = lin.inverse();
   const Eigen::Vector3d shift = transform.translate.cast<double>();

@@ -5,7 +5,7 @@
 #include "io/load_mesh.h"
 #include "sampling/mesh_field.h"
 #include "sampling/samplers.h"
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -16,7 +16,7 @@
 
 namespace ff::pipeline {
 
-Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene::TargetSpec& spec, const io::TriangleMesh& mesh,
+Result<std::shared_ptr<const pose::TargetSkin>> load_target_skin(const scene::TargetSpec& spec, const io::TriangleMesh& mesh,
                                                                     std::size_t i) {
   const auto fail = [&](const Error& e) { return Error{e.kind, fmt::format("targets[{}].animation: {}", i, e.message)}; };
   auto loaded = io::load_skin(spec.mesh, mesh, spec.transform);
@@ -24,7 +24,7 @@ Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene:
   if (!loaded->has_value())
     return fail(input_error(fmt::format("{} has no skin (no bones), so it has no clip '{}' to play",
                                         spec.mesh.filename().string(), spec.animation.clip)));
-  auto skin = std::make_shared<control::TargetSkin>();
+  auto skin = std::make_shared<pose::TargetSkin>();
   skin->skin = std::move(**loaded);
   auto clip = skin->skin.find_clip(spec.animation.clip);
   if (!clip) return fail(Error{clip.error().kind, fmt::format("{}: {}", spec.mesh.filename().string(), clip.error().message)});
@@ -34,16 +34,16 @@ Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene:
   for (const auto& w : skin->skin.warnings) spdlog::warn("target {}: {}", i, w);
   const auto& c = skin->skin.clips[*clip];
   const double seam = spec.animation.loop ? clip_seam(*skin, mesh) : 0.0;
-  skin->pingpong = spec.animation.loop && c.duration > 0.0 && (spec.animation.wrap == control::ClipWrap::PingPong ||
-                                           (spec.animation.wrap == control::ClipWrap::Auto && seam > control::kClipSeamTolerance));
+  skin->pingpong = spec.animation.loop && c.duration > 0.0 && (spec.animation.wrap == pose::ClipWrap::PingPong ||
+                                           (spec.animation.wrap == pose::ClipWrap::Auto && seam > pose::kClipSeamTolerance));
   spdlog::info("target {}: skinned, {} joints, clip '{}' ({:.3g} s, {} channels{})", i, skin->skin.joint_nodes.size(),
                c.name, c.duration, c.channels.size(),
                !spec.animation.loop ? "" : skin->pingpong ? ", played back and forth" : ", looped");
-  if (skin->pingpong && spec.animation.wrap == control::ClipWrap::Auto)
+  if (skin->pingpong && spec.animation.wrap == pose::ClipWrap::Auto)
     spdlog::info("target {}: clip '{}' ends {:.0f} % of the mesh's size away from where it starts, a jump the liquid "
                  "cannot follow: it plays backwards to its start, then forwards again (\"wrap\": \"repeat\" jumps)",
                  i, c.name, 100.0 * seam);
-  return std::shared_ptr<const control::TargetSkin>(std::move(skin));
+  return std::shared_ptr<const pose::TargetSkin>(std::move(skin));
 }
 
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene) {
@@ -71,7 +71,7 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
   return out;
 }
 
-double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh) {
+double clip_seam(const pose::TargetSkin& skin, const io::TriangleMesh& mesh) {
   if (skin.clip < 0 || static_cast<std::size_t>(skin.clip) >= skin.skin.clips.size() || mesh.vertices.empty() ||
       skin.skin.joints.size() != mesh.vertices.size() || skin.skin.weights.size() != mesh.vertices.size())
     return 0.0;
@@ -92,13 +92,13 @@ double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh) 
   return size > 0.0 && std::isfinite(jump) ? jump / size : 0.0;
 }
 
-double posed_volume_share(const control::TargetSkin& skin, const io::TriangleMesh& mesh, int samples) {
+double posed_volume_share(const pose::TargetSkin& skin, const io::TriangleMesh& mesh, int samples) {
   const double bind = io::signed_volume(mesh);
   if (!(std::abs(bind) > 0.0) || skin.clip < 0 || static_cast<std::size_t>(skin.clip) >= skin.skin.clips.size()) return 1.0;
   const double duration = skin.skin.clips[static_cast<std::size_t>(skin.clip)].duration;
   io::TriangleMesh posed = mesh;
   std::vector<io::Mat4f> K;
-  control::PosedJoints joints;
+  pose::PosedJoints joints;
   double share = 1.0;
   for (int k = 0; k < samples; ++k) {
     // Scene times whose clip times τ = k/(samples−1) of the clip (the last just short of its end, where a loop wraps).
@@ -206,9 +206,9 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
       const auto& t = targets[k];
       box.extend(t.box.min), box.extend(t.box.max);
       // A keyframed target sweeps a path: the domain holds its box at every keyframe.
-      const control::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth(), 0.5f * (t.box.min + t.box.max)};
+      const pose::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth(), 0.5f * (t.box.min + t.box.max)};
       for (const auto& key : motion.keys) {
-        const control::Pose pose = motion.at(key.time);
+        const pose::Pose pose = motion.at(key.time);
         for (int c = 0; c < 8; ++c)
           box.extend(pose.apply(Vec3f(c & 1 ? t.box.max.x() : t.box.min.x(), c & 2 ? t.box.max.y() : t.box.min.y(),
                                       c & 4 ? t.box.max.z() : t.box.min.z())));
@@ -218,14 +218,14 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
       // wall. Without this the walking character pressed its hands and feet flat against the walls, and 10 % of its
       // fluid stayed there.
       if (t.skin) {
-        const control::TargetSkin& sk = *t.skin;
+        const pose::TargetSkin& sk = *t.skin;
         const auto& clip = sk.skin.clips[static_cast<std::size_t>(sk.clip)];
         const double span = sk.spec.start + clip.duration / sk.spec.speed;
         std::vector<io::Mat4f> K;
         for (int q = 0; q <= 128; ++q) {
           const double time = span * q / 128.0;
           sk.world_joint_matrices(time, K);
-          const control::Pose pose = motion.at(time);
+          const pose::Pose pose = motion.at(time);
           for (std::size_t v = 0; v < t.mesh.vertices.size(); ++v)
             box.extend(pose.apply(io::skin_point(K, sk.skin.joints[v], sk.skin.weights[v], t.mesh.vertices[v])));
         }

@@ -7,7 +7,7 @@
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
 //                     target, so the formed shape is held by the control, not by the floor.
 // Mesh units are metres whatever the model's size. Given keys are never overridden.
-#include "control/skinning.h"
+#include "pose/skinning.h"
 #include "core/error.h"
 #include "scene/scene.h"
 #include "io/triangle_mesh.h"
@@ -28,23 +28,23 @@ struct TargetGeometry {
   double area = 0.0;    ///< m²
   Aabb box;
   /// The skin of a target whose scene gives it an animation clip (io/skin.h; the clip found): null otherwise.
-  std::shared_ptr<const control::TargetSkin> skin;
+  std::shared_ptr<const pose::TargetSkin> skin;
 };
 
 /// The skin of a target with an animation clip, for `mesh` (load_mesh's, the target's transform applied). Errors
 /// name the target: a file without bones, an unknown clip (naming the clips there are), a malformed skin.
-Result<std::shared_ptr<const control::TargetSkin>> load_target_skin(const scene::TargetSpec& spec,
+Result<std::shared_ptr<const pose::TargetSkin>> load_target_skin(const scene::TargetSpec& spec,
                                                                     const io::TriangleMesh& mesh, std::size_t i);
 
 /// The smallest share of its bind volume that `mesh` (world, bind pose, closed) keeps over `skin`'s clip, posed at
 /// `samples` clip times spread over the clip: Σ signed tetrahedra of the posed mesh over the bind mesh's (≤ 1; 1
 /// when no pose loses volume, or for a mesh without volume). huesitos.fbx: 0.88.
-double posed_volume_share(const control::TargetSkin& skin, const io::TriangleMesh& mesh, int samples = 64);
+double posed_volume_share(const pose::TargetSkin& skin, const io::TriangleMesh& mesh, int samples = 64);
 
 /// How far `skin`'s clip ends from where it starts: the largest distance between a vertex of `mesh` (world, bind pose)
 /// posed at the clip's first and at its last key time, over the bind mesh's box diagonal (0 for a clip that cycles;
 /// huesitos.fbx 0.79, X/anim_test.x 0.16). ClipWrap::Auto plays a clip back and forth above kClipSeamTolerance.
-double clip_seam(const control::TargetSkin& skin, const io::TriangleMesh& mesh);
+double clip_seam(const pose::TargetSkin& skin, const io::TriangleMesh& mesh);
 
 /// Loads every target with its transform (and the skin of an animated one). Errors name the target.
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);

@@ -131,7 +131,7 @@ Result<LivePose> LiveScene::set_pose(std::size_t t, const LivePose& in) {
   // The target's centre stays in the domain: beyond it no fluid can follow, and the sample grids cover the domain.
   const Vec3f lo = scene_.domain.min - targets_[t].pivot, hi = scene_.domain.max - targets_[t].pivot;
   p.translate = p.translate.cwiseMax(lo).cwiseMin(hi);
-  const control::Pose pose = control::make_pose(p.translate, p.rotate_deg, p.scale);
+  const pose::Pose pose = pose::make_pose(p.translate, p.rotate_deg, p.scale);
   motions_[t].live = pose;
   if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
   targets_[t].pose = p;

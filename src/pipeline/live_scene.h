@@ -6,7 +6,7 @@
 #include "pipeline/auto_scene.h"
 #include "pipeline/scene_setup.h"
 #include "control/registry.h"
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "scene/scene.h"
@@ -99,7 +99,7 @@ class LiveScene {
   std::vector<TargetGeometry> geometry_;
   std::vector<control::ControlTarget> controls_;  // master copy: a controller is made from a copy
   std::vector<TargetShapes> shapes_;
-  std::vector<control::TargetMotion> motions_;    // with the live poses (TargetMotion::live)
+  std::vector<pose::TargetMotion> motions_;    // with the live poses (TargetMotion::live)
   std::vector<LiveTarget> targets_;
   std::vector<std::filesystem::path> meshes_;
   sim::ParticleSet initial_, particles_;

@@ -1,4 +1,5 @@
 #include "pipeline/run.h"
+#include "pose/skin_eval.h"
 
 #include "io/write_vdb.h"
 
@@ -6,7 +7,7 @@
 
 #include "pipeline/auto_scene.h"
 #include "pipeline/run_budget.h"
-#include "pipeline/skin_transfer.h"
+#include "pose/skin_transfer.h"
 #include "io/write_rigged_glb.h"
 #include "pipeline/scene_setup.h"
 
@@ -74,7 +75,7 @@ Result<std::vector<std::uint8_t>> read_bytes(const fs::path& p) {
 namespace {
 
 /// Per-frame shape metrics of every target (app/scene_setup.h), and their N_c-weighted aggregate into `row`.
-void measure_frame(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motion,
+void measure_frame(const std::vector<TargetShapes>& shapes, const std::vector<pose::TargetMotion>& motion,
                    double time, const sim::ParticleSet& p, float r, int frame, std::vector<std::uint8_t>& controlled,
                    FrameRow& row, std::vector<TargetRow>& target_rows) {
   if (shapes.empty()) return;
@@ -279,7 +280,7 @@ Status write_report(const fs::path& out, const RunFacts& facts, const RunState& 
 struct FrameLoop {
   const fs::path& out;
   const RunFacts& facts;
-  const std::vector<control::TargetMotion>& motions;
+  const std::vector<pose::TargetMotion>& motions;
   int frames = 0;
   bool run_until_formed = false;
 };
@@ -402,24 +403,24 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
 }
 
 /// OUT/rigged.glb of a run whose one target is skinned: final.obj with the skin transferred from the target posed at
-/// the last frame (pipeline/skin_transfer.h), moved to the bind pose, with the target's skeleton and clips, so that
+/// the last frame (pose/skin_transfer.h), moved to the bind pose, with the target's skeleton and clips, so that
 /// it plays with no rigging step. The keyframed pose of that time, if any, is taken off first.
 Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const TargetGeometry& target,
-                      const control::TargetMotion& motion, double time, RunSummary& sum) {
+                      const pose::TargetMotion& motion, double time, RunSummary& sum) {
   auto formed = io::load_mesh(out / "mesh" / "final.obj");
   if (!formed) return Error{formed.error().kind, "rigging: " + formed.error().message};
   const Eigen::Affine3f rest = motion.at(time).rest_from_world();
   for (Vec3f& v : formed->vertices) v = rest * v;
-  const control::TargetSkin& skin = *target.skin;
-  FF_TRY(SkinnedSurface rigged,
-         transfer_skin(*formed, target.mesh, skin.skin, scene.targets[0].transform, skin.clip, skin.clip_time(time)));
-  // A clip the fluid played back and forth (control::ClipWrap) is also written baked that way, so that looping it in
+  const pose::TargetSkin& skin = *target.skin;
+  FF_TRY(pose::SkinnedSurface rigged,
+         pose::transfer_skin(*formed, target.mesh, skin.skin, scene.targets[0].transform, skin.clip, skin.clip_time(time)));
+  // A clip the fluid played back and forth (pose::ClipWrap) is also written baked that way, so that looping it in
   // three.js, Blender or Unity plays what the liquid did.
   io::Skin clips = skin.skin;
   if (skin.pingpong) {
     io::AnimationClip played = skin.skin.clips[static_cast<std::size_t>(skin.clip)];
     if (played.name.empty()) played.name = fmt::format("clip_{}", skin.clip);  // as write_rigged_glb names it
-    clips.clips.push_back(io::pingpong_clip(played));
+    clips.clips.push_back(pose::pingpong_clip(played));
   }
   FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, clips,
                                 scene.targets[0].transform, scene.targets[0].tint));

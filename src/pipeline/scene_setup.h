@@ -5,7 +5,8 @@
 // the live viewer (app/live_scene.h) steps exactly the scene a run would.
 #include "pipeline/auto_scene.h"
 #include "control/control_targets.h"
-#include "control/target_motion.h"
+#include "pose/skinned_target.h"
+#include "pose/target_motion.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "scene/scene.h"
@@ -28,23 +29,9 @@ namespace ff::pipeline {
 struct TargetShapes {
   std::vector<double> from;  // from[0] = −∞
   std::vector<metrics::TargetShape> shape;
-  /// A skinned target's first phase is measured against its posed mesh: the bind mesh and samples with their skin,
-  /// posed at each measured time and given a shape of their own (metrics::TargetShape::build).
-  struct Skinned {
-    std::shared_ptr<const control::TargetSkin> skin;
-    io::TriangleMesh bind_mesh;
-    std::vector<std::array<std::uint16_t, io::kMaxInfluences>> mesh_joints;
-    std::vector<std::array<float, io::kMaxInfluences>> mesh_weights;
-    std::vector<Vec3f> bind_samples;
-    std::vector<std::array<std::uint16_t, io::kMaxInfluences>> sample_joints;
-    std::vector<std::array<float, io::kMaxInfluences>> sample_weights;
-    float spacing = 0.0f;
-    /// The bind mesh's field, which posed_shape moves to each pose (MeshField::moved).
-    std::shared_ptr<const sampling::MeshField> bind_field;
-    /// The samples anchored to the posed mesh (control/mesh_anchors.h), as the controllers pose them. Null: the
-    /// samples are skinned by sample_joints/sample_weights.
-    std::shared_ptr<const control::MeshAnchors> anchors;
-  };
+  /// A skinned target's first phase is measured against its posed mesh: the bind mesh and samples with their skin
+  /// (pose/skinned_target.h), posed at each measured time and given a shape of their own (posed_shape).
+  using Skinned = pose::SkinnedTarget;
   std::optional<Skinned> skinned;
   const metrics::TargetShape& at(double t) const {
     std::size_t k = 0;
@@ -72,7 +59,7 @@ Result<MeshPhase> prepare_mesh(const scene::Scene& scene, std::size_t t, const s
 struct TargetSetup {
   std::vector<control::ControlTarget> controls;  ///< handed to make_controller (moved out)
   std::vector<TargetShapes> shapes;
-  std::vector<control::TargetMotion> motions;
+  std::vector<pose::TargetMotion> motions;
   nlohmann::json info = nlohmann::json::array();  ///< report.json "targets" (control file paths relative to report_dir)
   std::size_t control_count = 0;                  ///< samples of every target's first phase
 };
@@ -87,13 +74,10 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
 /// posed by `pose` (its keyframes); the signed distance is the posed mesh's own, exact (metrics::TargetShape::posed).
 /// `bind`: the target's shape at the bind pose (TargetShapes::shape[0]).
 Result<metrics::TargetShape> posed_shape(const metrics::TargetShape& bind, const TargetShapes::Skinned& skinned,
-                                         const control::Pose& pose, double time);
+                                         const pose::Pose& pose, double time);
 /// The same shape rebuilt from the posed mesh (its own SDF grid and winding numbers: ~2 s for the 9k-sample character):
 /// the reference posed_shape is measured against.
-Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& skinned, const control::Pose& pose, double time);
-
-/// A skinned target's samples at `time` (no keyframed pose) as the controllers pose them, skinned by `method`.
-std::vector<Vec3f> posed_samples(const TargetShapes::Skinned& skinned, double time, control::SkinningMethod method);
+Result<metrics::TargetShape> posed_shape_rebuilt(const TargetShapes::Skinned& skinned, const pose::Pose& pose, double time);
 
 /// The N_c-weighted shape metrics of one frame, and each target's own.
 struct ShapeMeasure {
@@ -104,7 +88,7 @@ struct ShapeMeasure {
 
 /// Measures every target at `time`, each in its rest frame (the fluid mapped into it by the inverse of the pose
 /// `motions[t].at(time)`). `controlled` is scratch. No targets: an empty measure.
-ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<control::TargetMotion>& motions,
+ShapeMeasure measure_targets(const std::vector<TargetShapes>& shapes, const std::vector<pose::TargetMotion>& motions,
                              double time, const sim::ParticleSet& p, float r, std::vector<std::uint8_t>& controlled);
 
 }  // namespace ff::pipeline

@@ -18,7 +18,7 @@ using nlohmann::json;
 
 Status TargetSpec::validate(std::string_view p) const {
   FF_CHECK(core::validate_fields(*this, p));
-  FF_CHECK((control::TargetMotion{keyframes, smooth(), Vec3f::Zero()}.validate(p)));
+  FF_CHECK((pose::TargetMotion{keyframes, smooth(), Vec3f::Zero()}.validate(p)));
   FF_CHECK(control::StrengthTrack{strength}.validate(p));
   for (std::size_t k = 1; k < swaps.size(); ++k)
     if (!(swaps[k].time > swaps[k - 1].time))

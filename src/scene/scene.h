@@ -18,9 +18,9 @@
 // Unknown keys are errors naming the JSON path and the closest valid key; out-of-range values name the key, the
 // value and the range. Mesh paths are relative to the scene file.
 #include "control/registry.h"
-#include "control/skinning.h"
+#include "pose/skinning.h"
 #include "control/strength.h"
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
 #include "core/error.h"
 #include "core/fields.h"
 #include "io/load_mesh.h"
@@ -49,7 +49,7 @@ struct TargetSpec {
   float start = 0.0f;          ///< s, when the target starts to attract fluid. [0, 1e6]
   /// Keyframed motion after the transform (translate/rotate/scale about the target's centre), see
   /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
-  std::vector<control::Keyframe> keyframes;
+  std::vector<pose::Keyframe> keyframes;
   Interpolation interpolation = Interpolation::Linear;  ///< between keyframes: linear, or smoothstep ("smooth")
   /// Linear RGB this target's liquid absorbs towards in the exported GLB (its water material's attenuationColor).
   Vec3f tint{0.16f, 0.48f, 0.85f};
@@ -66,7 +66,7 @@ struct TargetSpec {
   std::vector<Swap> swaps;
   /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "wrap", "start",
   /// "skinning", "weights", "follow"}. Without a clip the target is not animated, as a mesh without a skin.
-  control::AnimationSpec animation;
+  pose::AnimationSpec animation;
   /// Control strength over time (control/strength.h): [{"time": T, "value": S}, ...], S in [0, 1]; none: 1.
   std::vector<control::StrengthKey> strength;
 

@@ -17,12 +17,13 @@ ALLOWED = {
     "sim": {"core"},
     "surface": {"core", "io"},
     "metrics": {"core", "io", "sampling"},
-    "control": {"core", "io", "sampling", "sim"},
-    "scene": {"core", "io", "sampling", "sim", "surface", "control"},
-    "pipeline": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene"},
-    "server": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline"},
-    "app": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline", "server"},
-    "python": {"core", "io", "sampling", "sim", "surface", "metrics", "control", "scene", "pipeline"},
+    "pose": {"core", "io", "sampling"},
+    "control": {"core", "io", "sampling", "sim", "pose"},
+    "scene": {"core", "io", "sampling", "sim", "surface", "pose", "control"},
+    "pipeline": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene"},
+    "server": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline"},
+    "app": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline", "server"},
+    "python": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([a-z_]+)/[^"]+"')
 

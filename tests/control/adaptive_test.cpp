@@ -20,7 +20,7 @@ using test::Case;
 using test::sphere_case;
 
 test::Outcome simulate(const Case& c, const std::string& controller, int frames, const control::AdaptiveParams& ap = {},
-                       const control::TargetMotion& motion = {},
+                       const pose::TargetMotion& motion = {},
                        const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
                        const Case* measure_against = nullptr, const control::StrengthTrack& strength = {}) {
   control::ControllerSpec spec;
@@ -61,7 +61,7 @@ TEST(Adaptive, AMovingTargetStaysFormedWhileItMoves) {
   // Formed by 2.5 s, then moved 0.3 m along x in 1.2 s (0.25 m/s: half its diameter per second, the issue's
   // speed) while turning 45° about y; measured mid-motion at 3.5 s in the target's own frame.
   const Case c = sphere_case();
-  control::TargetMotion motion;
+  pose::TargetMotion motion;
   motion.pivot = Vec3f(0.0f, 0.45f, 0.0f);
   motion.keys = {{2.5, Vec3f::Zero(), Vec3f::Zero(), 1.0f}, {3.7, Vec3f(0.3f, 0.0f, 0.0f), Vec3f(0, 45, 0), 1.0f}};
   const auto still = simulate(c, "adaptive", 210);

@@ -28,7 +28,7 @@ Case sphere_case() {
   return c;
 }
 
-Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const control::TargetMotion& motion,
+Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const pose::TargetMotion& motion,
                  const std::vector<std::pair<double, sampling::ControlSet>>& swaps, const Case* measure_against,
                  const control::StrengthTrack& strength) {
   Outcome o;
@@ -57,7 +57,7 @@ Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames,
   EXPECT_TRUE(shape.has_value());
   std::vector<std::uint8_t> controlled(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) controlled[i] = p.bound_control[i] != kInvalidIndex;
-  const control::Pose pose = motion.at(frames / 60.0);
+  const pose::Pose pose = motion.at(frames / 60.0);
   o.m = metrics::measure(*shape, 0, p.position, p.target, controlled, c.sp.particle_radius, pose.rest_from_world(),
                          pose.scale);
   std::vector<std::uint8_t> t;

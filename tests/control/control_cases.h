@@ -35,7 +35,7 @@ struct Outcome {
 
 /// Runs `spec` on the case for `frames` frames of 1/60 s, then measures against `measure_against` (default: c). The
 /// target's control strength follows `strength` (no keys: 1).
-Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const control::TargetMotion& motion = {},
+Outcome simulate(const Case& c, const control::ControllerSpec& spec, int frames, const pose::TargetMotion& motion = {},
                  const std::vector<std::pair<double, sampling::ControlSet>>& swaps = {},
                  const Case* measure_against = nullptr, const control::StrengthTrack& strength = {});
 

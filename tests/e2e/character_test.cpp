@@ -121,7 +121,7 @@ INSTANTIATE_TEST_SUITE_P(
                       420, 2.0},
         // An open sheet (10 vertices, 2 joints, a 5.5 s bend): its fluid is one particle per surface sample, poured
         // from above onto the strip's top edge, so it forms later; from 10 s the figures cover a whole play of the clip.
-        // Its samples ride the posed triangles (control::MeshAnchors): skinned by their own weights they followed
+        // Its samples ride the posed triangles (pose::MeshAnchors): skinned by their own weights they followed
         // the bones' smooth blend while the 10-vertex sheet cuts the bend's corner, and 96.9 % of the fluid was inside.
         CharacterCase{"simple_skin",
                       R"({"mesh": "/usr/share/assimp/models/glTF2/simple_skin/simple_skin.gltf", "animation": {"clip": "0"}})",

@@ -78,7 +78,7 @@ TEST_P(SkinnedBlender, PosedSamplesLieInsideBlendersPoseOfTheSameClip) {
     // Ours: the bind mesh and samples skinned at the same time.
     std::vector<io::Mat4f> K;
     sk.skin->world_joint_matrices(times[k], K);
-    control::PosedJoints joints;
+    pose::PosedJoints joints;
     joints.set(K, sk.skin->spec.skinning);
     Aabb mine;
     for (std::size_t v = 0; v < sk.bind_mesh.vertices.size(); ++v)

@@ -1,6 +1,7 @@
 // Skinned, animated targets (issue 19): a file's skin read through Assimp, its control samples weighted and posed,
 // on the demo character and assimp-testmodels' skinned files.
 #include "io/load_mesh.h"
+#include "pose/skin_eval.h"
 #include "io/skin.h"
 #include "pipeline/auto_scene.h"
 #include "pipeline/scene_setup.h"
@@ -29,7 +30,7 @@ struct SkinnedCase {
   std::string clip;
   Vec3f scale;
   /// A sheet's samples stay within this many d_c of the posed sheet: they ride its posed triangles
-  /// (control::MeshAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
+  /// (pose::MeshAnchors; measured 0.0000 d_c on simple_skin.gltf. Skinned by their own weights they were
   /// 1.03 d_c off, where the 10-vertex sheet cuts its bend's corner).
   float sheet_tolerance = 0.01f;
 };
@@ -66,7 +67,7 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   t.mesh = c.mesh;
   t.transform.scale = c.scale;
   t.animation.clip = c.clip;
-  if (std::getenv("FF_W")) t.animation.weights = control::SkinWeightSource::ClosestPoint;
+  if (std::getenv("FF_W")) t.animation.weights = pose::SkinWeightSource::ClosestPoint;
   scene.targets.push_back(t);
   scene.auto_radius = true;
   if (c.name == "simple_skin") {  // a sheet: its own fluid box and spacing, which its sheet tolerance was measured at
@@ -125,18 +126,18 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   if (sk.anchors && sk.anchors->caged()) {
     // A cage is guarded (control/cage_guard.h); what the guard adds to placing the samples, one thread, 20 poses.
     ASSERT_TRUE(sk.anchors->guarded());
-    control::MeshAnchors bare = *sk.anchors;
+    pose::MeshAnchors bare = *sk.anchors;
     bare.guard_begin.clear();
     double guarded_s = 0.0, bare_s = 0.0;
     Vec3f sum = Vec3f::Zero();  // kept, so the placing is not optimised away
     for (int k = 0; k < 20; ++k) {
       std::vector<io::Mat4f> K;
       sk.skin->world_joint_matrices(duration * k / 20.0, K);
-      control::PosedJoints joints;
-      joints.set(K, control::SkinningMethod::Linear);
+      pose::PosedJoints joints;
+      joints.set(K, pose::SkinningMethod::Linear);
       std::vector<Vec3f> v;
       bare.pose_vertices(joints, v);
-      for (const control::MeshAnchors* a : std::initializer_list<const control::MeshAnchors*>{sk.anchors.get(), &bare}) {
+      for (const pose::MeshAnchors* a : std::initializer_list<const pose::MeshAnchors*>{sk.anchors.get(), &bare}) {
         const auto t0 = std::chrono::steady_clock::now();
         for (std::size_t i = 0; i < sk.bind_samples.size(); ++i) sum += a->place(i, v);
         (a == &bare ? bare_s : guarded_s) += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -150,14 +151,14 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
     const double time = duration * k / 4.0 * 0.999;
     std::vector<io::Mat4f> K;
     sk.skin->world_joint_matrices(time, K);
-    control::PosedJoints joints;
-    joints.set(K, control::SkinningMethod::Linear);
+    pose::PosedJoints joints;
+    joints.set(K, pose::SkinningMethod::Linear);
     io::TriangleMesh posed = sk.bind_mesh;
     for (std::size_t v = 0; v < posed.vertices.size(); ++v)
       posed.vertices[v] = joints.apply(sk.mesh_joints[v], sk.mesh_weights[v], sk.bind_mesh.vertices[v]);
     auto field = sampling::MeshField::build(posed);
     ASSERT_TRUE(field.has_value());
-    const std::vector<Vec3f> x = posed_samples(sk, time, control::SkinningMethod::Linear);
+    const std::vector<Vec3f> x = posed_samples(sk, time, pose::SkinningMethod::Linear);
     if (sheet) {
       // A sheet's samples lie on it: posed, they stay on the posed sheet.
       float worst = 0.0f;
@@ -173,7 +174,7 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
       if (in_bind[i]) kept += field->inside(x[i]);
     const double frac = double(kept) / double(n_in);
     if (sk.anchors && sk.anchors->caged()) {  // the cage without its guard, for the record
-      control::MeshAnchors bare = *sk.anchors;
+      pose::MeshAnchors bare = *sk.anchors;
       bare.guard_begin.clear();
       std::vector<Vec3f> v;
       bare.pose_vertices(joints, v);
@@ -289,8 +290,8 @@ TEST_P(Skinned, TheSkinReadInAChildProcessIsTheSkinReadHere) {
   }
   // Posed at a time inside the clip, the two skins put every vertex at the same place.
   std::vector<io::Mat4f> kx, ky;
-  x.joint_matrices(0, 0.5 * x.clips[0].duration, kx);
-  y.joint_matrices(0, 0.5 * y.clips[0].duration, ky);
+  pose::joint_matrices(x, 0, 0.5 * x.clips[0].duration, kx);
+  pose::joint_matrices(y, 0, 0.5 * y.clips[0].duration, ky);
   EXPECT_EQ(kx, ky);
   EXPECT_GT(x.clips[0].channels.size(), 0u);
 }
@@ -300,7 +301,7 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
   ASSERT_FALSE(glb.empty());
   std::printf("%-14s %-16s %12s %14s %14s %9s %9s\n", "weights", "skinning", "kept inside", "mean |dNN|/d", "p99 |dNN|/d",
               "rho p1", "rho p99");
-  for (const auto weights : {control::SkinWeightSource::ClosestPoint, control::SkinWeightSource::Diffusion}) {
+  for (const auto weights : {pose::SkinWeightSource::ClosestPoint, pose::SkinWeightSource::Diffusion}) {
     scene::Scene scene;
     scene::TargetSpec t;
     t.mesh = glb;
@@ -331,13 +332,13 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
       }
       nn_bind[i] = std::sqrt(best), nn_of[i] = who;
     }
-    for (const auto method : {control::SkinningMethod::Linear, control::SkinningMethod::DualQuaternion}) {
+    for (const auto method : {pose::SkinningMethod::Linear, pose::SkinningMethod::DualQuaternion}) {
       double worst_kept = 1.0, worst_mean = 0.0, worst_p99 = 0.0, rho_p1 = 1.0, rho_p99 = 1.0;
       for (int k = 1; k <= 4; ++k) {
         const double time = 1.1 * k / 4.0 * 0.999;
         std::vector<io::Mat4f> K;
         sk.skin->world_joint_matrices(time, K);
-        control::PosedJoints joints;
+        pose::PosedJoints joints;
         joints.set(K, method);
         io::TriangleMesh posed = sk.bind_mesh;
         for (std::size_t v = 0; v < posed.vertices.size(); ++v)
@@ -376,8 +377,8 @@ TEST(SkinnedMethods, MeasuredOnTheWalkingCharacter) {
         worst_p99 = std::max(worst_p99, change[change.size() * 99 / 100]);
       }
       std::printf("%-14s %-16s %11.2f%% %14.4f %14.4f %9.3f %9.3f\n",
-                  weights == control::SkinWeightSource::Diffusion ? "diffusion" : "closest_point",
-                  method == control::SkinningMethod::Linear ? "linear" : "dual_quaternion", 100.0 * worst_kept, worst_mean,
+                  weights == pose::SkinWeightSource::Diffusion ? "diffusion" : "closest_point",
+                  method == pose::SkinningMethod::Linear ? "linear" : "dual_quaternion", 100.0 * worst_kept, worst_mean,
                   worst_p99, rho_p1, rho_p99);
       EXPECT_GE(worst_kept, 0.99);
     }
@@ -398,7 +399,7 @@ TEST(SkinnedMetrics, ThePosedMeshFieldAgreesWithTheRebuiltPosedShape) {
   const TargetShapes& shapes = setup->setup.shapes[0];
   const auto& sk = setup->skinned();
   const float r = setup->scene.solver.particle_radius, d = 2.0f * r;
-  const control::Pose pose = setup->setup.motions[0].at(0.0);
+  const pose::Pose pose = setup->setup.motions[0].at(0.0);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-2.0f * d, 2.0f * d);
   double fast_s = 0, rebuilt_s = 0;

@@ -6,6 +6,7 @@
 //   "wave" (2 s): mid turns about x, 0° → 30° → −30° (keys at 0, 1, 2 s).
 // Everything is computed from the definitions here, nothing is read from a file.
 #include "io/load_mesh.h"
+#include "pose/skin_eval.h"
 #include "io/skin.h"
 #include "io/triangle_mesh.h"
 
@@ -75,7 +76,7 @@ inline io::Skin bar_skeleton() {
   s.nodes[2].translation = Vec3f(0.0f, 0.5f * kBarHeight, 0.0f);
   s.joint_nodes = {1, 2};
   std::vector<io::Mat4f> rest;
-  s.global_matrices(-1, 0.0, rest);
+  pose::global_matrices(s, -1, 0.0, rest);
   for (int n : s.joint_nodes) s.inverse_bind.push_back(rest[static_cast<std::size_t>(n)].inverse());
 
   io::AnimationClip bend;
@@ -133,7 +134,7 @@ inline std::vector<Vec3f> pose_world(const io::TriangleMesh& world_bind,
                                      const std::vector<std::array<float, io::kMaxInfluences>>& weights, const io::Skin& skin,
                                      const io::MeshTransform& transform, int clip, double t) {
   std::vector<io::Mat4f> k;
-  skin.joint_matrices(clip, t, k);
+  pose::joint_matrices(skin, clip, t, k);
   const Eigen::Matrix4d tm = io::transform_matrix(transform).cast<double>();
   for (auto& m : k) m = (tm * m.cast<double>() * tm.inverse()).cast<float>();
   std::vector<Vec3f> out(world_bind.vertices.size());

@@ -3,8 +3,8 @@
 // change goes to the server as a pose (protocol.setPose), at most every `throttleMs`, and the last one on release.
 import * as THREE from 'three';
 import { PALETTE } from './particles.js';
+import { rotationFromDegrees } from './rotation.js';
 
-const DEG = Math.PI / 180;
 const ZERO = [0, 0, 0];
 
 export class TargetBoxes {
@@ -21,6 +21,7 @@ export class TargetBoxes {
     this.drag = null;
     this.lastSent = 0;
     this.tmp = new THREE.Vector3();
+    this.tmpMatrix = new THREE.Matrix4();
     this.movePose = { translate: [0, 0, 0], rotate: [0, 0, 0], scale: 1 };
   }
 
@@ -41,7 +42,6 @@ export class TargetBoxes {
       const edges = new THREE.LineSegments(new THREE.EdgesGeometry(geo), new THREE.LineBasicMaterial({ color: colour }));
       const group = new THREE.Group();
       group.add(pick, edges);
-      group.rotation.order = 'ZYX';  // the server's R = Rz Ry Rx
       this.scene.add(group);
       const entry = { group, pick, pivot, pose: { translate: [0, 0, 0], rotate: [0, 0, 0], scale: 1 } };
       this.targets.push(entry);
@@ -57,7 +57,10 @@ export class TargetBoxes {
     for (let k = 0; k < 3; ++k) t.pose.translate[k] = pose.translate[k], t.pose.rotate[k] = r[k];
     t.pose.scale = pose.scale ?? 1;
     t.group.position.set(t.pivot.x + t.pose.translate[0], t.pivot.y + t.pose.translate[1], t.pivot.z + t.pose.translate[2]);
-    t.group.rotation.set(t.pose.rotate[0] * DEG, t.pose.rotate[1] * DEG, t.pose.rotate[2] * DEG);
+    // The server's rotation, from the one definition it is tested against (rotation.js).
+    const r = rotationFromDegrees(t.pose.rotate);
+    this.tmpMatrix.set(r[0], r[1], r[2], 0, r[3], r[4], r[5], 0, r[6], r[7], r[8], 0, 0, 0, 0, 1);
+    t.group.quaternion.setFromRotationMatrix(this.tmpMatrix);
     t.group.scale.setScalar(t.pose.scale);
   }
 

@@ -1,10 +1,11 @@
 // Samples anchored to the posed mesh (control/mesh_anchors.h). An open sheet's ride their posed triangles: at the bind
 // pose every sample is placed where it was; posed, it lies on the posed sheet, where skinning it by its interpolated
-// weights would leave it; and ControlSamples poses anchored samples so, with their velocity the placement's forward
+// weights would leave it; and control::ControlSamples poses anchored samples so, with their velocity the placement's forward
 // difference. A closed mesh's sit in it as a cage (mean value coordinates): reproduced exactly at bind, and inside the
 // bent mesh. The skeleton is the hand-built bar of tests/support/skin_bar.h, its sheet a coarse strip.
 #include "control/control_samples.h"
-#include "control/mesh_anchors.h"
+#include "pose/skin_eval.h"
+#include "pose/mesh_anchors.h"
 #include "sampling/mesh_field.h"
 #include "support/skin_bar.h"
 
@@ -13,7 +14,7 @@
 #include <limits>
 #include <random>
 
-namespace ff::control {
+namespace ff::pose {
 namespace {
 
 // A flat strip in the z = 0 plane, x ∈ [0, 0.1], y ∈ [0, 1], in `rings` rows of two triangles: an open sheet whose
@@ -65,7 +66,7 @@ Result<MeshAnchors> anchors_of(const Sheet& s) {
 
 PosedJoints bend_at(const io::Skin& skin, double t) {
   std::vector<io::Mat4f> K;
-  skin.joint_matrices(0, t, K);  // clip 0: "bend", mid turning 0° → 90° about z over 1 s
+  pose::joint_matrices(skin, 0, t, K);  // clip 0: "bend", mid turning 0° → 90° about z over 1 s
   PosedJoints j;
   j.set(std::move(K), SkinningMethod::Linear);
   return j;
@@ -122,7 +123,7 @@ TEST(MeshAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   const Sheet s = make_sheet(4, 300, 0.01f);
   auto a = anchors_of(s);
   ASSERT_TRUE(a.has_value()) << a.error().message;
-  ControlTarget ct;
+  control::ControlTarget ct;
   ct.set.position = s.samples;
   ct.set.velocity.assign(s.samples.size(), Vec3f::Zero());
   ct.set.density.assign(s.samples.size(), 1000.0f);
@@ -139,10 +140,10 @@ TEST(MeshAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   ct.skin_weights.resize(s.samples.size());
   for (std::size_t i = 0; i < s.samples.size(); ++i) test::bar_influence(s.samples[i].y(), ct.skin_joints[i], ct.skin_weights[i]);
   ct.anchors = std::make_shared<const MeshAnchors>(*a);
-  std::vector<ControlTarget> targets;
+  std::vector<control::ControlTarget> targets;
   targets.push_back(ct);
-  ControlSamples cs;
-  ASSERT_TRUE(cs.init(targets, "test", SampleOptions{.cell_order = true, .velocities = true}).ok());
+  control::ControlSamples cs;
+  ASSERT_TRUE(cs.init(targets, "test", control::SampleOptions{.cell_order = true, .velocities = true}).ok());
   const double t = 0.6;
   const float dt = 0.01f;
   cs.update(t, dt);
@@ -164,7 +165,7 @@ TEST(MeshAnchors, ControlSamplesPoseAnchoredSamplesAndTheirVelocity) {
   auto short_anchors = std::make_shared<MeshAnchors>(*a);
   short_anchors->triangle.pop_back();
   targets[0].anchors = short_anchors;
-  const Status refused = ControlSamples{}.init(targets, "test", SampleOptions{});
+  const Status refused = control::ControlSamples{}.init(targets, "test", control::SampleOptions{});
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.error().message.find("targets[0]: mesh anchors that do not match"), std::string::npos) << refused.error().message;
 }
@@ -220,4 +221,4 @@ TEST(MeshAnchors, ACageReproducesItsSamplesAndKeepsThemInsideTheBentMesh) {
 }
 
 }  // namespace
-}  // namespace ff::control
+}  // namespace ff::pose

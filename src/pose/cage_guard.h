@@ -35,14 +35,14 @@
 // Measured on huesitos (4017 samples, tests/pipeline/skinned_target_test.cpp), the share inside the posed mesh at five
 // clip times: the cage alone 100, 96.43 (folded), 98.45 (folded), 99.98, 99.95 %; eased in 100, 97.78, 99.33, 100,
 // 100 %; with the folds' partners 100 % at all five. What it costs is in bench/RESULTS.md ("eighth part").
-#include "control/mesh_anchors.h"
+#include "pose/mesh_anchors.h"
 #include "core/error.h"
 #include "sampling/mesh_field.h"
 
 #include <span>
 #include <vector>
 
-namespace ff::control {
+namespace ff::pose {
 
 /// Clip times sampled to find the samples to guard.
 inline constexpr int kGuardPoses = 96;
@@ -86,4 +86,4 @@ float posed_winding_number(const MeshAnchors& a, const std::vector<Vec3f>& posed
 /// point of its edges as segments).
 Vec3f closest_feature(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c, int& feature);
 
-}  // namespace ff::control
+}  // namespace ff::pose

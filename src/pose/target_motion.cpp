@@ -1,22 +1,15 @@
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
+
+#include "core/keys.h"
 
 #include "core/params.h"
+#include "core/rotation.h"
 
-#include <fmt/format.h>
 
 #include <cmath>
-#include <numbers>
 
-namespace ff::control {
+namespace ff::pose {
 
-namespace {
-Eigen::Matrix3f rotation_of(const Vec3f& deg) {
-  const float k = static_cast<float>(std::numbers::pi / 180.0);
-  return (Eigen::AngleAxisf(deg.z() * k, Vec3f::UnitZ()) * Eigen::AngleAxisf(deg.y() * k, Vec3f::UnitY()) *
-          Eigen::AngleAxisf(deg.x() * k, Vec3f::UnitX()))
-      .toRotationMatrix();
-}
-}  // namespace
 
 Eigen::Affine3f Pose::rest_from_world() const {
   // x_rest = pivot + R^T (x − pivot − translate) / s
@@ -29,7 +22,7 @@ Eigen::Affine3f Pose::rest_from_world() const {
 Pose make_pose(const Vec3f& translate, const Vec3f& rotate_deg, float scale) {
   Pose p;
   p.translate = translate;
-  p.rotation = rotation_of(rotate_deg);
+  p.rotation = core::rotation_from_degrees(rotate_deg.cast<double>()).cast<float>();
   p.scale = scale;
   return p;
 }
@@ -62,14 +55,7 @@ Pose TargetMotion::at(double time) const {
 }
 
 Status TargetMotion::validate(std::string_view path) const {
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    const auto p = fmt::format("{}.keyframes[{}]", path, k);
-    FF_CHECK(core::validate_fields(keys[k], p));
-    if (k > 0 && !(keys[k].time > keys[k - 1].time))
-      return param_error(fmt::format("{}.time = {} must be later than the keyframe before it ({})", p, keys[k].time,
-                                     keys[k - 1].time));
-  }
-  return {};
+  return core::validate_keys(std::span<const Keyframe>(keys), path, "keyframes", "keyframe");
 }
 
-}  // namespace ff::control
+}  // namespace ff::pose

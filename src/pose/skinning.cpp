@@ -1,11 +1,12 @@
-#include "control/skinning.h"
+#include "pose/skinning.h"
+#include "pose/skin_eval.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include <cmath>
 
-namespace ff::control {
+namespace ff::pose {
 
 double TargetSkin::clip_time(double t) const {
   if (clip < 0 || static_cast<std::size_t>(clip) >= skin.clips.size()) return 0.0;
@@ -23,7 +24,7 @@ void TargetSkin::world_joint_matrices(double t, std::vector<io::Mat4f>& out) con
 }
 
 void TargetSkin::clip_joint_matrices(double tau, std::vector<io::Mat4f>& out) const {
-  skin.joint_matrices(clip, tau, out);
+  joint_matrices(skin, clip, tau, out);
   const io::Mat4f inv = transform.inverse();
   for (auto& k : out) k = transform * k * inv;
 }
@@ -74,4 +75,4 @@ Vec3f PosedJoints::apply(const std::array<std::uint16_t, io::kMaxInfluences>& jo
   return q0.toRotationMatrix() * (s * bind) + t;
 }
 
-}  // namespace ff::control
+}  // namespace ff::pose

@@ -1,15 +1,18 @@
-// Skin evaluation (io/skin.h): clips sampled into node matrices, joint matrices, clip lookup. No Assimp here: the
-// loader is skin.cpp.
-#include "io/skin.h"
-
-#include <fmt/format.h>
+// A skin's clips evaluated (pose/skin_eval.h): keys interpolated into node matrices, joint matrices, the pingpong
+// clip. No Assimp here: the loader is io/skin.cpp.
+#include "pose/skin_eval.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <numbers>
 
-namespace ff::io {
+namespace ff::pose {
+
+using io::AnimationClip;
+using io::Mat4f;
+using io::NodeChannel;
+using io::Quatf;
+using io::trs;
+
 namespace {
 
 /// The key interval of `t` in `times` (increasing): i and the blend u ∈ [0, 1] between key i and i + 1.
@@ -36,28 +39,6 @@ Quatf slerp_key(const std::vector<double>& times, const std::vector<Quatf>& valu
   return values[i].slerp(u, values[i + 1]);  // Eigen's slerp takes the shorter arc
 }
 
-Mat4f trs(const Vec3f& t, const Quatf& r, const Vec3f& s) {
-  Mat4f m = Mat4f::Identity();
-  m.topLeftCorner<3, 3>() = r.normalized().toRotationMatrix() * s.asDiagonal();
-  m.topRightCorner<3, 1>() = t;
-  return m;
-}
-
-}  // namespace
-
-Mat4f transform_matrix(const MeshTransform& t) {
-  // As MeshTransform::apply: R = Rz · Ry · Rx from degrees, in double.
-  const Vec3d r = t.rotate_deg.cast<double>() * (std::numbers::pi / 180.0);
-  const Eigen::Matrix3d rot = (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.topLeftCorner<3, 3>() = rot * t.scale.cast<double>().asDiagonal();
-  m.topRightCorner<3, 1>() = t.translate.cast<double>();
-  return m.cast<float>();
-}
-
-namespace {
 // Keys (times, values) followed by their mirror images about the clip's end; a key at the end is not doubled.
 template <class T>
 void mirror_keys(std::vector<double>& times, std::vector<T>& values, double duration) {
@@ -83,22 +64,9 @@ AnimationClip pingpong_clip(const AnimationClip& clip) {
   return out;
 }
 
-Mat4f SkinNode::local() const { return trs(translation, rotation, scale); }
-
-Result<std::size_t> Skin::find_clip(const std::string& name) const {
-  for (std::size_t c = 0; c < clips.size(); ++c)
-    if (clips[c].name == name) return c;
-  std::size_t index = 0;
-  const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), index);
-  if (ec == std::errc() && end == name.data() + name.size() && index < clips.size()) return index;
-  std::string there;
-  for (std::size_t c = 0; c < clips.size(); ++c)
-    there += fmt::format("{}{} '{}'", c ? ", " : "", c, clips[c].name);
-  return input_error(fmt::format("no animation clip '{}' (the file has {})", name,
-                                 clips.empty() ? std::string("none") : there));
-}
-
-void Skin::global_matrices(int clip, double t, std::vector<Mat4f>& out) const {
+void global_matrices(const io::Skin& skin, int clip, double t, std::vector<Mat4f>& out) {
+  const auto& nodes = skin.nodes;
+  const auto& clips = skin.clips;
   std::vector<Vec3f> tr(nodes.size()), sc(nodes.size());
   std::vector<Quatf> ro(nodes.size());
   for (std::size_t n = 0; n < nodes.size(); ++n) tr[n] = nodes[n].translation, ro[n] = nodes[n].rotation, sc[n] = nodes[n].scale;
@@ -120,12 +88,14 @@ void Skin::global_matrices(int clip, double t, std::vector<Mat4f>& out) const {
   }
 }
 
-void Skin::joint_matrices(int clip, double t, std::vector<Mat4f>& out) const {
+void joint_matrices(const io::Skin& skin, int clip, double t, std::vector<Mat4f>& out) {
   std::vector<Mat4f> global;
-  global_matrices(clip, t, global);
+  global_matrices(skin, clip, t, global);
+  const auto& joint_nodes = skin.joint_nodes;
+  const auto& inverse_bind = skin.inverse_bind;
   out.resize(joint_nodes.size());
   for (std::size_t j = 0; j < joint_nodes.size(); ++j)
     out[j] = global[static_cast<std::size_t>(joint_nodes[j])] * inverse_bind[j];
 }
 
-}  // namespace ff::io
+}  // namespace ff::pose

@@ -1,5 +1,6 @@
 // Skin weights and bind pose for the formed mesh (pipeline/skin_transfer.h).
-#include "pipeline/skin_transfer.h"
+#include "pose/skin_transfer.h"
+#include "pose/skin_eval.h"
 
 #include "core/parallel.h"
 #include "sampling/mesh_field.h"
@@ -10,7 +11,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ff::pipeline {
+namespace ff::pose {
 namespace {
 
 using Mat4d = Eigen::Matrix4d;
@@ -84,7 +85,7 @@ std::uint16_t dominant_joint(const io::Skin& skin, Index v) {
 
 std::vector<io::Mat4f> world_joint_matrices(const io::Skin& skin, const io::MeshTransform& transform, int clip, double t) {
   std::vector<io::Mat4f> k;
-  skin.joint_matrices(clip, t, k);
+  joint_matrices(skin, clip, t, k);
   const Mat4d tm = io::transform_matrix(transform).cast<double>();
   const Mat4d ti = tm.inverse();
   for (auto& m : k) m = (tm * m.cast<double>() * ti).cast<float>();
@@ -190,4 +191,4 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
   return out;
 }
 
-}  // namespace ff::pipeline
+}  // namespace ff::pose

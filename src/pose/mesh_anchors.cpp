@@ -1,6 +1,6 @@
-#include "control/mesh_anchors.h"
+#include "pose/mesh_anchors.h"
 
-#include "control/cage_guard.h"
+#include "pose/cage_guard.h"
 #include "core/parallel.h"
 
 #include <fmt/format.h>
@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ff::control {
+namespace ff::pose {
 
 bool MeshAnchors::consistent(std::size_t samples) const {
   const std::size_t nv = mesh.vertices.size();
@@ -179,4 +179,4 @@ void triangle_anchor(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f
   height = q.dot(n) / std::sqrt(len2);
 }
 
-}  // namespace ff::control
+}  // namespace ff::pose

@@ -1,4 +1,4 @@
-#include "sampling/skin_weights.h"
+#include "pose/skin_weights.h"
 
 #include "core/neighbor_grid.h"
 #include "core/parallel.h"
@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <numeric>
 
-namespace ff::sampling {
+namespace ff::pose {
 
 void top_influences(std::span<const float> dense, std::array<std::uint16_t, io::kMaxInfluences>& joints,
                     std::array<float, io::kMaxInfluences>& weights) {
@@ -35,7 +35,7 @@ void top_influences(std::span<const float> dense, std::array<std::uint16_t, io::
   for (int k = 0; k < n; ++k) joints[k] = bj[k], weights[k] = bw[k] / sum;
 }
 
-Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const MeshField& field, const io::Skin& skin,
+Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const sampling::MeshField& field, const io::Skin& skin,
                                        std::span<const Vec3f> samples, float spacing, SkinWeighting how) {
   if (skin.joints.size() != mesh.vertices.size() || skin.weights.size() != mesh.vertices.size())
     return param_error(fmt::format("skin weights: {} weighted vertices for a mesh of {}", skin.joints.size(),
@@ -47,7 +47,7 @@ Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const MeshF
   std::vector<float> distance(n, 0.0f);
   core::parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
-    const MeshField::Closest c = field.closest(samples[i]);
+    const sampling::MeshField::Closest c = field.closest(samples[i]);
     distance[i] = c.distance;
     const auto& tri = mesh.triangles[c.triangle];
     const Vec3f a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]], cc = mesh.vertices[tri[2]];
@@ -122,4 +122,4 @@ Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const MeshF
   return out;
 }
 
-}  // namespace ff::sampling
+}  // namespace ff::pose

@@ -1,4 +1,4 @@
-#include "control/cage_guard.h"
+#include "pose/cage_guard.h"
 
 #include "core/parallel.h"
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <unordered_map>
 
-namespace ff::control {
+namespace ff::pose {
 
 namespace {
 
@@ -284,4 +284,4 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   return stats;
 }
 
-}  // namespace ff::control
+}  // namespace ff::pose

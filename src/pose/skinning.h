@@ -22,7 +22,7 @@
 #include <string_view>
 #include <vector>
 
-namespace ff::control {
+namespace ff::pose {
 
 enum class SkinningMethod { Linear, DualQuaternion };
 enum class SkinWeightSource { ClosestPoint, Diffusion };
@@ -115,4 +115,4 @@ class PosedJoints {
   std::vector<Eigen::Matrix3f> stretch_;
 };
 
-}  // namespace ff::control
+}  // namespace ff::pose

@@ -38,7 +38,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace ff::pipeline {
+namespace ff::pose {
 
 struct SkinnedSurface {
   io::TriangleMesh bind_mesh;  ///< the formed mesh moved to the bind pose, world space (T applied); same triangles
@@ -63,4 +63,4 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
 /// shows it.
 std::vector<io::Mat4f> world_joint_matrices(const io::Skin& skin, const io::MeshTransform& transform, int clip, double t);
 
-}  // namespace ff::pipeline
+}  // namespace ff::pose

@@ -1,13 +1,12 @@
-// Keyframed target motion (control/target_motion.h): poses at, before, after and between keyframes, smoothstep
+// Keyframed target motion (pose/target_motion.h): poses at, before, after and between keyframes, smoothstep
 // easing, the inverse used by the metrics, live poses, and the keyframe checks.
-#include "control/strength.h"
-#include "control/target_motion.h"
+#include "pose/target_motion.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace ff::control {
+namespace ff::pose {
 namespace {
 
 constexpr float kTol = 1e-5f;
@@ -82,37 +81,6 @@ TEST(TargetMotion, ALivePoseReplacesTheKeyframesAboutTheTargetsPivot) {
   }
 }
 
-TEST(StrengthTrack, InterpolatesLinearlyAndHoldsTheEndValues) {
-  StrengthTrack s;
-  EXPECT_EQ(s.at(0.0), 1.0f);  // no keys: full strength
-  EXPECT_EQ(s.at(1e6), 1.0f);
-  s.keys = {{1.0, 1.0f}, {2.0, 0.0f}, {4.0, 0.5f}};
-  EXPECT_EQ(s.at(0.0), 1.0f);
-  EXPECT_EQ(s.at(1.0), 1.0f);
-  EXPECT_FLOAT_EQ(s.at(1.25), 0.75f);
-  EXPECT_EQ(s.at(2.0), 0.0f);  // exactly 0 at a key of 0: the controller then adds nothing
-  EXPECT_FLOAT_EQ(s.at(3.0), 0.25f);
-  EXPECT_EQ(s.at(4.0), 0.5f);
-  EXPECT_EQ(s.at(100.0), 0.5f);
-}
-
-TEST(StrengthTrack, KeysMustBeLaterEachTimeAndInRange) {
-  StrengthTrack s;
-  s.keys = {{1.0, 1.0f}, {2.0, 0.0f}};
-  EXPECT_TRUE(s.validate("targets[0]").ok());
-  s.keys[1].time = 1.0;
-  Status st = s.validate("targets[0]");
-  ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.error().message.find("targets[0].strength[1].time"), std::string::npos) << st.error().message;
-  s.keys[1].time = 2.0;
-  s.keys[1].value = 1.5f;
-  st = s.validate("targets[0]");
-  ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.error().message.find("targets[0].strength[1].value"), std::string::npos) << st.error().message;
-  s.keys[1].value = NAN;
-  EXPECT_FALSE(s.validate("targets[0]").ok());
-}
-
 TEST(TargetMotion, KeyframesMustBeLaterEachTimeAndInRange) {
   TargetMotion m = two_keys(false);
   EXPECT_TRUE(m.validate("targets[0]").ok());
@@ -131,4 +99,4 @@ TEST(TargetMotion, KeyframesMustBeLaterEachTimeAndInRange) {
 }
 
 }  // namespace
-}  // namespace ff::control
+}  // namespace ff::pose

@@ -21,7 +21,7 @@
 #include <span>
 #include <vector>
 
-namespace ff::sampling {
+namespace ff::pose {
 
 enum class SkinWeighting { ClosestPoint, Diffusion };
 
@@ -32,7 +32,7 @@ struct SampleSkin {
 
 /// The weights of `samples` (world, bind pose) from the skin of `mesh` (world, bind pose; `field` built from it,
 /// triangle indices as in `mesh`). `spacing` is the samples' d_c. Errors: Param for sizes that disagree.
-Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const MeshField& field, const io::Skin& skin,
+Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const sampling::MeshField& field, const io::Skin& skin,
                                        std::span<const Vec3f> samples, float spacing, SkinWeighting how);
 
 /// The four largest of `dense` (one weight per joint), renormalised (ties: lower joint first); all zero when
@@ -40,4 +40,4 @@ Result<SampleSkin> sample_skin_weights(const io::TriangleMesh& mesh, const MeshF
 void top_influences(std::span<const float> dense, std::array<std::uint16_t, io::kMaxInfluences>& joints,
                     std::array<float, io::kMaxInfluences>& weights);
 
-}  // namespace ff::sampling
+}  // namespace ff::pose

@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-namespace ff::control {
+namespace ff::pose {
 
 struct Keyframe {
   double time = 0.0;               ///< s, ≥ 0, strictly increasing along the list
@@ -57,4 +57,4 @@ struct TargetMotion {
   Status validate(std::string_view path) const;
 };
 
-}  // namespace ff::control
+}  // namespace ff::pose

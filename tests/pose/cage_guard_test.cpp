@@ -1,8 +1,9 @@
 // The cage's guard (control/cage_guard.h): the closest feature of a triangle is its closest point, and on a coarse bar
 // bent through its clip the guarded cage keeps the samples inside the bent mesh where the cage alone lets some out,
 // moves none at the bind pose but those nearer the surface than the least guard depth, and poses them smoothly.
-#include "control/cage_guard.h"
-#include "control/mesh_anchors.h"
+#include "pose/cage_guard.h"
+#include "pose/skin_eval.h"
+#include "pose/mesh_anchors.h"
 #include "sampling/mesh_field.h"
 #include "support/skin_bar.h"
 
@@ -13,7 +14,7 @@
 #include <random>
 #include <utility>
 
-namespace ff::control {
+namespace ff::pose {
 namespace {
 
 TEST(CageGuard, TheClosestFeatureIsTheTrianglesClosestPoint) {
@@ -67,7 +68,7 @@ struct Bent {
 
 PosedJoints bend(const io::Skin& skin, double t) {
   std::vector<io::Mat4f> K;
-  skin.joint_matrices(0, t, K);
+  pose::joint_matrices(skin, 0, t, K);
   PosedJoints j;
   j.set(std::move(K), SkinningMethod::Linear);
   return j;
@@ -195,4 +196,4 @@ TEST(CageGuard, RefusesWhatDoesNotMatch) {
 }
 
 }  // namespace
-}  // namespace ff::control
+}  // namespace ff::pose

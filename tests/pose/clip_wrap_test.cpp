@@ -1,14 +1,15 @@
-// How a looped clip starts over (control::ClipWrap): repeated, it jumps back to its first pose; played back and forth
-// (pingpong), its clip time runs forwards and backwards and never jumps; io::pingpong_clip bakes that into one clip of
+// How a looped clip starts over (pose::ClipWrap): repeated, it jumps back to its first pose; played back and forth
+// (pingpong), its clip time runs forwards and backwards and never jumps; pose::pingpong_clip bakes that into one clip of
 // twice the duration, which rigged.glb carries. The skeleton is the hand-built bar of tests/support/skin_bar.h: its
 // "bend" clip ends far from where it starts (the root slid 0.2 m, the upper half turned 90°).
-#include "control/skinning.h"
+#include "pose/skinning.h"
+#include "pose/skin_eval.h"
 #include "io/skin.h"
 #include "support/skin_bar.h"
 
 #include <gtest/gtest.h>
 
-namespace ff::control {
+namespace ff::pose {
 namespace {
 
 TargetSkin bend_skin(bool loop, bool pingpong) {
@@ -59,7 +60,7 @@ TEST(ClipWrap, APingpongClipPlaysTheClipThenItsMirror) {
   for (int c = 0; c < 2; ++c) {
     const io::AnimationClip& clip = skin.clips[static_cast<std::size_t>(c)];
     io::Skin baked = skin;
-    baked.clips.push_back(io::pingpong_clip(clip));
+    baked.clips.push_back(pose::pingpong_clip(clip));
     const int p = static_cast<int>(baked.clips.size()) - 1;
     EXPECT_EQ(baked.clips.back().name, clip.name + " pingpong");
     EXPECT_DOUBLE_EQ(baked.clips.back().duration, 2.0 * clip.duration);
@@ -75,8 +76,8 @@ TEST(ClipWrap, APingpongClipPlaysTheClipThenItsMirror) {
     std::vector<io::Mat4f> a, b;
     for (int k = 0; k <= 40; ++k) {
       const double s = 2.0 * clip.duration * k / 40.0;
-      baked.global_matrices(p, s, a);
-      skin.global_matrices(c, s <= clip.duration ? s : 2.0 * clip.duration - s, b);
+      pose::global_matrices(baked, p, s, a);
+      pose::global_matrices(skin, c, s <= clip.duration ? s : 2.0 * clip.duration - s, b);
       for (std::size_t n = 0; n < a.size(); ++n) EXPECT_TRUE(a[n].isApprox(b[n], 1e-5f)) << clip.name << " at " << s;
     }
   }
@@ -91,7 +92,7 @@ TEST(ClipWrap, KeysInsideTheClipAndANamelessClip) {
   ch.rotation_times = {0.25, 0.5};
   ch.rotations = {test::about(Vec3f::UnitZ(), 10), test::about(Vec3f::UnitZ(), 60)};
   clip.channels = {ch};
-  const io::AnimationClip p = io::pingpong_clip(clip);
+  const io::AnimationClip p = pose::pingpong_clip(clip);
   EXPECT_EQ(p.name, "clip pingpong");
   ASSERT_EQ(p.channels[0].rotation_times.size(), 4u);
   const double want[] = {0.25, 0.5, 1.5, 1.75};
@@ -100,11 +101,11 @@ TEST(ClipWrap, KeysInsideTheClipAndANamelessClip) {
   skin.clips = {clip, p};
   std::vector<io::Mat4f> a, b;
   for (double s : {0.0, 0.1, 0.4, 0.75, 1.0, 1.25, 1.6, 1.9, 2.0}) {
-    skin.global_matrices(1, s, a);
-    skin.global_matrices(0, s <= 1.0 ? s : 2.0 - s, b);
+    pose::global_matrices(skin, 1, s, a);
+    pose::global_matrices(skin, 0, s <= 1.0 ? s : 2.0 - s, b);
     for (std::size_t n = 0; n < a.size(); ++n) EXPECT_TRUE(a[n].isApprox(b[n], 1e-5f)) << s;
   }
 }
 
 }  // namespace
-}  // namespace ff::control
+}  // namespace ff::pose

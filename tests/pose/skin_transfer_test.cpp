@@ -3,7 +3,8 @@
 // posed target must get the target's weights and land on the inflated bind shape; a singular blend, which must fall
 // back to the dominant joint; one-line errors; the rigged GLB of a transferred mesh played in three.js at the time it
 // was formed; and the speed on a ~12k-vertex formed mesh against a ~30k-triangle target.
-#include "pipeline/skin_transfer.h"
+#include "pose/skin_transfer.h"
+#include "pose/skin_eval.h"
 
 #include "core/parallel.h"
 #include "io/load_mesh.h"
@@ -18,7 +19,7 @@
 #include <chrono>
 #include <cstdio>
 
-namespace ff::pipeline {
+namespace ff::pose {
 namespace {
 
 using io::MeshTransform;
@@ -79,7 +80,7 @@ TEST(SkinTransfer, ARigidJointGivesTheInverseMotionExactly) {
     EXPECT_EQ(r->unreached, 0u);
     // Independently: K_w = T · G(0.6) · G_rest⁻¹ · T⁻¹ from the node's TRS, inverted in double.
     std::vector<io::Mat4f> g;
-    skin.global_matrices(0, 0.6, g);
+    pose::global_matrices(skin, 0, 0.6, g);
     const Eigen::Matrix4d tm = io::transform_matrix(t).cast<double>();
     const Eigen::Matrix4d kw = tm * g[0].cast<double>() * skin.nodes[0].local().cast<double>().inverse() * tm.inverse();
     const Eigen::Matrix4d inv = kw.inverse();
@@ -295,4 +296,4 @@ TEST(SkinTransfer, TwelveThousandVerticesAgainstThirtyThousandTrianglesSameOnAny
 }
 
 }  // namespace
-}  // namespace ff::pipeline
+}  // namespace ff::pose

@@ -14,7 +14,7 @@
 //    blend skinning folds a coarse mesh's bends: huesitos.fbx kept 96.4 % of its samples inside at worst). So a
 //    cage can also carry a guard (control/cage_guard.h) that eases the samples its clip brings out back in.
 // A cage costs one weight per sample and vertex, so it is for coarse meshes (AnimationSpec::follow).
-#include "control/skinning.h"
+#include "pose/skinning.h"
 #include "core/error.h"
 #include "core/types.h"
 #include "io/skin.h"
@@ -24,7 +24,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace ff::control {
+namespace ff::pose {
 
 struct MeshAnchors {
   io::TriangleMesh mesh;  ///< the bind mesh, world (the target's transform applied)
@@ -108,4 +108,4 @@ Result<MeshAnchors> anchor_to_triangles(io::TriangleMesh mesh,
   return a;
 }
 
-}  // namespace ff::control
+}  // namespace ff::pose
