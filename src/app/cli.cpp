@@ -1,6 +1,6 @@
 #include "app/cli.h"
 
-#include "control/registry.h"
+#include "pipeline/front_doors.h"
 
 #include <fmt/format.h>
 
@@ -15,11 +15,11 @@ int fail(const Error& e) {
 }
 
 CLI::Option* add_controller_option(CLI::App* sub, std::string& name, const std::string& what) {
-  return sub->add_option("--controller", name, fmt::format("shape controller: {}{}", control::controller_names(), what))
+  return sub->add_option("--controller", name, fmt::format("shape controller: {}{}", pipeline::controller_names(), what))
       ->check(CLI::Validator(
           [](std::string& v) {
-            return control::find_controller(v) ? std::string()
-                                               : fmt::format("{} is not one of: {}", v, control::controller_names());
+            return pipeline::is_controller(v) ? std::string()
+                                              : fmt::format("{} is not one of: {}", v, pipeline::controller_names());
           },
           "CONTROLLER"));
 }

@@ -2,16 +2,11 @@
 #include "app/cli.h"
 #include "app/progress_bar.h"
 #include "io/particle_frames.h"
-#include "io/write_mesh.h"
+#include "pipeline/front_doors.h"
 #include "pipeline/mesh_export.h"
-#include "surface/surface_params.h"
 
 #include <spdlog/spdlog.h>
 
-#include <nlohmann/json.hpp>
-
-#include <algorithm>
-#include <fstream>
 #include <memory>
 
 namespace ff::app {
@@ -29,37 +24,21 @@ struct MeshCli {
 int run_mesh(MeshCli& o) {
   o.mesh.glb = !o.no_glb, o.mesh.pc2 = !o.no_pc2, o.mesh.frame_objs = !o.no_frames, o.mesh.final_only = o.final_only;
   o.mesh.quantize = !o.no_quantize;
-  auto extraction = surface::parse_extraction(o.extraction);
-  if (!extraction) return fail(param_error("--extraction " + extraction.error().message));
-  o.mesh.params.extraction = *extraction;
+  if (auto st = pipeline::set_extraction(o.mesh.params, o.extraction); !st.ok()) return fail(st.error());
   if (auto st = o.mesh.validate(); !st.ok()) return fail(st.error());
   auto frames = io::particle_frames(o.input);
   if (!frames) return fail(frames.error());
   // A run's output folder: its targets' water tints from the run's report (one material per target in the GLB).
-  if (std::error_code ec; fs::is_regular_file(o.input / "report.json", ec)) {
-    std::ifstream in(o.input / "report.json");
-    const auto report = nlohmann::json::parse(in, nullptr, false);
-    // Read defensively (a report is ours, but may be edited): a target without a readable tint keeps the default,
-    // so target k always gets material k; values are clamped to [0, 1].
-    if (report.is_object() && report.contains("scene") && report["scene"].is_object() &&
-        report["scene"].contains("targets") && report["scene"]["targets"].is_array())
-      for (const auto& t : report["scene"]["targets"]) {
-        Vec3f tint = io::WaterMaterial{}.tint;
-        if (t.is_object() && t.contains("tint") && t["tint"].is_array() && t["tint"].size() == 3)
-          for (int a = 0; a < 3; ++a)
-            if (t["tint"][a].is_number()) tint[a] = std::clamp(t["tint"][a].get<float>(), 0.0f, 1.0f);
-        o.mesh.target_tints.push_back(tint);
-      }
-  }
+  o.mesh.target_tints = pipeline::run_target_tints(o.input);
   spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());
   ProgressBar bar(stderr);
   auto sum = pipeline::export_meshes(*frames, o.out, o.mesh, bar);
   if (!sum) return fail(sum.error());
   spdlog::info("mesh: {} frame(s) meshed in {:.2f} s at spacing {:.4g} m; final.obj: {} triangles, {} vertices ({} from "
-               "marching {}), {}, genus {}, {} component(s) -> {}",
+               "{}), {}, genus {}, {} component(s) -> {}",
                sum->frames_meshed, sum->seconds, sum->spacing, sum->final_triangles, sum->final_vertices,
                sum->mc_triangles_final,
-               o.mesh.params.extraction == surface::Extraction::MarchingTetrahedra ? "tetrahedra" : "cubes",
+               pipeline::extraction_words(o.mesh.params),
                sum->final_ok ? "watertight and manifold" : "NOT watertight/manifold", sum->final_genus,
                sum->final_components, (o.out / "mesh" / "final.obj").string());
   return sum->final_ok ? 0 : fail(numerical_error("mesh: the final mesh failed its checks"));

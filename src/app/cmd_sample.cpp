@@ -1,10 +1,7 @@
 // `fluidform sample MESH -o CONTROLS.ply`: a mesh sampled into control particles (PLY with density, weight, phi).
 #include "app/cli.h"
 #include "app/progress_bar.h"
-#include "io/atomic_file.h"
-#include "io/load_mesh.h"
-#include "sampling/control_io.h"
-#include "sampling/samplers.h"
+#include "pipeline/front_doors.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -24,31 +21,14 @@ struct SampleCli {
 };
 
 int run_sample(SampleCli& o) {
-  const auto m = sampling::parse_method(o.method);
-  if (!m)
-    return fail(param_error(fmt::format("--method {} is not one of {}", o.method, core::choice_names(o.params.method))));
-  o.params.method = *m;
-  if (o.drop_box.size() % 6 != 0) return fail(param_error("--drop-box takes 6 numbers per box: min x y z, max x y z"));
-  for (std::size_t i = 0; i < o.drop_box.size(); i += 6) {
-    sampling::DropBox b;
-    b.min = Vec3f(o.drop_box[i], o.drop_box[i + 1], o.drop_box[i + 2]);
-    b.max = Vec3f(o.drop_box[i + 3], o.drop_box[i + 4], o.drop_box[i + 5]);
-    o.params.sparse.drop_boxes.push_back(b);
-  }
-  if (auto st = o.params.validate(); !st.ok()) return fail(st.error());
-  // Check the output before the (possibly long) sampling.
-  const fs::path dir = o.out.has_parent_path() ? o.out.parent_path() : fs::path(".");
-  if (auto st = io::ensure_writable_dir(dir); !st.ok()) return fail(st.error());
-  auto mesh = io::load_mesh(o.mesh);
-  if (!mesh) return fail(mesh.error());
+  if (auto st = pipeline::set_sampler(o.params, o.method, o.drop_box); !st.ok()) return fail(st.error());
   ProgressBar bar(stderr);
-  sampling::SampleReport rep;
-  auto set = sampling::sample_target(*mesh, o.params, 0, &rep, bar);
-  if (!set) return fail(set.error());
-  for (const auto& w : rep.warnings) spdlog::warn("{}", w);
-  if (auto st = sampling::write_controls_ply(o.out, *set); !st.ok()) return fail(st.error());
-  spdlog::info("{} control particles ({}, spacing {:g} m, volume {:g} m^3, {} dropped) in {:.2f} s -> {}", set->size(),
-               sampling::method_name(rep.method), rep.spacing, rep.volume, rep.dropped, rep.seconds, o.out.string());
+  auto s = pipeline::sample_mesh_file(o.mesh, o.out, o.params, bar);
+  if (!s) return fail(s.error());
+  for (const auto& w : s->report.warnings) spdlog::warn("{}", w);
+  const auto& rep = s->report;
+  spdlog::info("{} control particles ({}, spacing {:g} m, volume {:g} m^3, {} dropped) in {:.2f} s -> {}", s->set.size(),
+               pipeline::sampler_name(rep.method), rep.spacing, rep.volume, rep.dropped, rep.seconds, o.out.string());
   return 0;
 }
 

@@ -6,6 +6,7 @@
 #include "core/timer.h"
 #include "io/atomic_file.h"
 #include "sim/emitter.h"
+#include "surface/reconstruct.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -155,6 +156,10 @@ Status LiveScene::set_mesh(std::size_t t, std::size_t mesh, core::Progress& prog
   FF_CHECK(rebuild_controller());
   spdlog::info("target {} is now {} ({} control particles)", t, meshes_[mesh].filename().string(), controls_[t].set.size());
   return {};
+}
+
+Result<io::TriangleMesh> LiveScene::surface() const {
+  return surface::reconstruct(particles_.position, scene_.solver.spacing(), surface::SurfaceParams{});
 }
 
 }  // namespace ff::pipeline

@@ -9,6 +9,7 @@
 #include "pose/target_motion.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "io/triangle_mesh.h"
 #include "scene/scene.h"
 #include "sim/particle_set.h"
 #include "sim/pbf_solver.h"
@@ -55,6 +56,9 @@ struct LiveTarget {
   LivePose pose;
 };
 
+/// The fluid's particles (sim::ParticleSet), as the front ends name them.
+using Particles = sim::ParticleSet;
+
 class LiveScene {
  public:
   static Result<std::unique_ptr<LiveScene>> create(const scene::Scene& scene, const LiveOptions& options,
@@ -81,6 +85,13 @@ class LiveScene {
     std::swap(out, particles_);
     return out;
   }
+  /// The particles in id order (the order of a run's PLY frames), stable from frame to frame: the solver keeps
+  /// them in cell order, which changes between frames.
+  void particles_by_id(std::vector<Vec3f>& x, std::vector<Vec3f>& v, std::vector<std::uint8_t>& target) const {
+    sim::sorted_by_id(particles_, x, v, target);
+  }
+  /// The current particles reconstructed into the mesh the viewer shows (the scene's spacing, surface defaults).
+  Result<io::TriangleMesh> surface() const;
   const std::vector<LiveTarget>& targets() const { return targets_; }
   /// The scene's meshes: every target's and every mesh swap's, once each, then LiveOptions::extra_meshes.
   const std::vector<std::filesystem::path>& meshes() const { return meshes_; }

@@ -1,8 +1,8 @@
 // The Python module `fluidform` (pybind11): the pipeline library for scripts and notebooks. Each function is a
 // thin layer over the stage the CLI calls, so results, defaults and one-line error messages are the CLI's.
-//   sample(mesh, ...)          a mesh (file or NumPy arrays) → control samples (sampling::sample_target)
-//   reconstruct(points, ...)   particles → (vertices, faces) (surface::reconstruct)
-//   measure(positions, mesh)   the shape metrics of METHOD §d (metrics::measure)
+//   sample(mesh, ...)          a mesh (file or NumPy arrays) → control samples (pipeline::sample_mesh)
+//   reconstruct(points, ...)   particles → (vertices, faces) (pipeline::mesh_particles)
+//   measure(positions, mesh)   the shape metrics of METHOD §d (pipeline::measure_particles)
 //   run(scene, ...)            `fluidform run` (pipeline::run_scene), with a progress callback that can cancel
 //   Simulation(scene)          a scene stepped frame by frame (pipeline::LiveScene), its arrays as NumPy views
 // Heavy calls release the GIL; progress callbacks take it back (python/convert.h).
@@ -10,12 +10,10 @@
 #include "python/simulation.h"
 
 #include "io/load_mesh.h"
-#include "metrics/shape_metrics.h"
+#include "pipeline/front_doors.h"
 #include "pipeline/mesh_export.h"
 #include "pipeline/run.h"
-#include "sampling/samplers.h"
 #include "scene/scene.h"
-#include "surface/reconstruct.h"
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
@@ -57,9 +55,7 @@ Samples sample(const py::object& mesh, std::optional<std::size_t> count, std::op
                const std::string& method, std::uint64_t seed, const py::object& progress, const py::kwargs& kwargs) {
   sampling::SamplingParams params;
   read_kwargs(kwargs, "sampling", params);
-  const auto m = sampling::parse_method(method);
-  if (!m) raise(param_error(fmt::format("method {} is not one of {}", method, core::choice_names(params.method))));
-  params.method = *m;
+  check(pipeline::set_sampler(params, method));
   params.seed = seed;
   if (count && spacing) raise(param_error("sample: give count or spacing, not both"));
   if (count) params.auto_count = *count;
@@ -67,20 +63,21 @@ Samples sample(const py::object& mesh, std::optional<std::size_t> count, std::op
   check(params.validate());
   const io::TriangleMesh target = mesh_argument(mesh);
   PyProgress bar(progress);
-  sampling::SampleReport rep;
-  auto set = [&] {
+  auto sampled = [&] {
     py::gil_scoped_release nogil;
-    return sampling::sample_target(target, params, 0, &rep, bar);
+    return pipeline::sample_mesh(target, params, bar);
   }();
   bar.rethrow_if_any();
-  const sampling::ControlSet s = unwrap(std::move(set));
+  const pipeline::SampledMesh m = unwrap(std::move(sampled));
+  const sampling::ControlSet& s = m.set;
+  const sampling::SampleReport& rep = m.report;
   Samples out;
   out.positions = points_to_array(s.position);
   out.weights = floats_to_array(s.weight);
   out.density = floats_to_array(s.density);
   out.phi = floats_to_array(s.phi);
   out.spacing = s.spacing, out.support = s.support, out.mass = s.mass;
-  out.method = std::string(sampling::method_name(rep.method));
+  out.method = std::string(pipeline::sampler_name(rep.method));
   out.volume = rep.volume, out.area = rep.area;
   out.warnings = rep.warnings;
   return out;
@@ -92,10 +89,9 @@ py::tuple reconstruct(const py::object& points, std::optional<float> spacing, co
   check(params.validate());
   const std::vector<Vec3f> p = points_from_array(points, "points");
   if (p.empty()) raise(input_error("points: the array is empty"));
-  const float d = spacing ? *spacing : unwrap(pipeline::estimate_spacing(p));
   auto mesh = [&] {
     py::gil_scoped_release nogil;
-    return surface::reconstruct(p, d, params);
+    return pipeline::mesh_particles(p, spacing, params);
   }();
   return mesh_to_arrays(unwrap(std::move(mesh)));
 }
@@ -121,31 +117,13 @@ py::dict measure(const py::object& positions, const py::object& mesh, std::optio
     }
     std::copy(c.data(), c.data() + x.size(), flags.begin());
   }
-  std::vector<Vec3f> controls;
-  float d_c = 2.0f * r;
-  if (samples.is_none()) {
-    // As a run does: the target sampled at the fluid spacing d = 2r (METHOD §0: d_c = d).
-    sampling::SamplingParams params;
-    params.spacing = d_c;
-    controls = unwrap([&] {
-      py::gil_scoped_release nogil;
-      return sampling::sample_target(target, params);
-    }()).position;
-  } else {
-    controls = points_from_array(samples, "samples");
-    if (auto est = pipeline::estimate_spacing(controls); est) d_c = *est;
-  }
-  const std::vector<std::uint8_t> ids(x.size(), 0);
-  auto shape = [&] {
+  std::optional<std::vector<Vec3f>> controls;
+  if (!samples.is_none()) controls = points_from_array(samples, "samples");
+  auto measured = [&] {
     py::gil_scoped_release nogil;
-    return metrics::TargetShape::build(target, controls, d_c);
+    return pipeline::measure_particles(target, x, flags, r, std::move(controls));
   }();
-  if (!shape) raise(shape.error());
-  metrics::FrameMetrics f;
-  {
-    py::gil_scoped_release nogil;
-    f = metrics::measure(*shape, 0, x, ids, flags, r);
-  }
+  const metrics::FrameMetrics f = unwrap(std::move(measured));
   py::dict d;
   d["error_rate"] = f.error_rate;
   d["e_fwd"] = f.e_fwd;

@@ -3,7 +3,6 @@
 #include "python/convert.h"
 
 #include "pipeline/live_scene.h"
-#include "sim/particle_set.h"
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
@@ -20,7 +19,7 @@ namespace fs = std::filesystem;
 /// (LiveScene::detach_particles): the old buffers move here and stay valid, unchanged, for as long as an array
 /// needs them; the solver goes on with an equal copy. With no array alive nothing is copied.
 struct ViewOwner {
-  sim::ParticleSet detached;
+  pipeline::Particles detached;
 };
 
 class Simulation {
@@ -118,7 +117,7 @@ class Simulation {
     auto lock = guard("sorted");
     std::vector<Vec3f> x, v;
     std::vector<std::uint8_t> t;
-    sim::sorted_by_id(live_->particles(), x, v, t);
+    live_->particles_by_id(x, v, t);
     py::array_t<std::uint8_t> ta(static_cast<py::ssize_t>(t.size()));
     std::copy(t.begin(), t.end(), ta.mutable_data());
     py::dict d;

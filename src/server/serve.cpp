@@ -2,17 +2,14 @@
 
 #include "pipeline/live_scene.h"
 #include "pipeline/mesh_export.h"
-#include "control/registry.h"
+#include "pipeline/front_doors.h"
 #include "core/timer.h"
-#include "io/csv_table.h"
 #include "io/particle_frames.h"
 #include "scene/scene.h"
 #include "io/write_ply.h"
-#include "metrics/report.h"
 #include "server/frame_codec.h"
 #include "server/messages.h"
 #include "server/static_files.h"
-#include "surface/reconstruct.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -138,7 +135,7 @@ json live_hello(const pipeline::LiveScene& s, bool paused, bool surface) {
   json meshes = json::array();
   for (const auto& m : s.meshes()) meshes.push_back(m.filename().string());
   json controllers = json::array();
-  for (const auto& e : control::registry()) controllers.push_back(std::string(e.name));
+  for (const auto& name : pipeline::controller_list()) controllers.push_back(name);
   const auto& d = s.scene().domain;
   return {{"type", "hello"},
           {"mode", "live"},
@@ -155,7 +152,7 @@ json live_hello(const pipeline::LiveScene& s, bool paused, bool surface) {
           {"animation", nullptr}};
 }
 
-// The live surface: the current particles reconstructed (surface::reconstruct, the scene's surface defaults) into
+// The live surface: the current particles reconstructed (LiveScene::surface, the scene's surface defaults) into
 // the mesh the viewer shows. Made on the simulation thread between frames, at most every kSurfaceEvery seconds of
 // wall time: 10k particles take ~0.1 s, so the simulation keeps most of its time.
 constexpr double kSurfaceEvery = 0.5;
@@ -166,9 +163,8 @@ constexpr double kMeasureEvery = 0.25;
 
 void publish_surface(Shared& sh, const pipeline::LiveScene& scene) {
   core::Stopwatch clock;
-  const auto& x = scene.particles().position;
-  if (x.empty()) return;
-  auto mesh = surface::reconstruct(x, scene.scene().solver.spacing(), surface::SurfaceParams{});
+  if (scene.particles().size() == 0) return;
+  auto mesh = scene.surface();
   if (!mesh) {
     spdlog::warn("serve: live surface: {}", mesh.error().message);
     return;
@@ -222,7 +218,7 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
   std::vector<Vec3f> by_id_x, by_id_v;
   std::vector<std::uint8_t> by_id_t;
   const auto publish_particles = [&](const FrameInfo& info) {
-    sim::sorted_by_id(scene.particles(), by_id_x, by_id_v, by_id_t);
+    scene.particles_by_id(by_id_x, by_id_v, by_id_t);
     publish(sh, info, by_id_x, by_id_t);
   };
   publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
@@ -296,37 +292,8 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
 }
 
 // Playback of a finished run: its particle frames, read one at a time, in a loop at the run's frame rate.
-struct Recording {
-  std::vector<fs::path> frames;
-  std::vector<double> error_rate, step_seconds;  // from metrics.csv, per frame (NaN when unknown)
-  double fps = 60.0;
-  bool animation = false;
-};
-
-Result<Recording> open_recording(const fs::path& out) {
-  Recording r;
-  FF_TRY(r.frames, io::particle_frames(out));
-  r.animation = fs::is_regular_file(out / "animation.glb");
-  std::ifstream rep(out / "report.json");
-  if (rep) {
-    const json j = json::parse(rep, nullptr, false);
-    if (!j.is_discarded() && j.contains("scene") && j["scene"].contains("output") && j["scene"]["output"]["fps"].is_number())
-      r.fps = j["scene"]["output"]["fps"].get<double>();
-  }
-  r.error_rate.assign(r.frames.size(), NAN);
-  r.step_seconds.assign(r.frames.size(), 0.0);
-  const io::CsvTable csv = io::read_csv(out / "metrics.csv");
-  const std::size_t c_frame = csv.column(metrics::column::frame), c_err = csv.column(metrics::column::error_rate),
-                    c_step = csv.column(metrics::column::step_time);
-  for (const auto& v : csv.rows) {
-    if (c_frame >= v.size()) continue;
-    const long f = std::strtol(v[c_frame].c_str(), nullptr, 10);
-    if (f < 0 || f >= long(r.frames.size())) continue;
-    if (c_err < v.size()) r.error_rate[std::size_t(f)] = std::strtod(v[c_err].c_str(), nullptr);
-    if (c_step < v.size()) r.step_seconds[std::size_t(f)] = std::strtod(v[c_step].c_str(), nullptr);
-  }
-  return r;
-}
+// (pipeline::open_run reads the folder.)
+using Recording = pipeline::RunRecording;
 
 json playback_hello(const Recording& r, bool paused) {
   return {{"type", "hello"},     {"mode", "playback"}, {"fps", r.fps},          {"frames", r.frames.size()},
@@ -390,7 +357,7 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
   std::vector<Mount> mounts{{"/", web}, {"/vendor/three/", three}};
   std::error_code ec;
   if (fs::is_directory(opt.input, ec)) {
-    FF_TRY(rec, open_recording(opt.input));
+    FF_TRY(rec, pipeline::open_run(opt.input));
     if (rec->animation) mounts.push_back({"/run/", opt.input});
     spdlog::info("serve: playing back {} frames of {}{}", rec->frames.size(), opt.input.string(),
                  rec->animation ? " and its animation.glb" : "");

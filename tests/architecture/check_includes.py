@@ -21,10 +21,14 @@ ALLOWED = {
     "control": {"core", "io", "sampling", "sim", "pose"},
     "scene": {"core", "io", "sampling", "sim", "surface", "pose", "control"},
     "pipeline": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene"},
-    "server": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline"},
-    "app": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline", "server"},
-    "python": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene", "pipeline"},
+    # The front doors go through the pipeline: they include pipeline/, scene/ and the plain types of core/ and io/,
+    # never a stage (sampling, sim, surface, metrics, pose, control), so a stage's entry point changes in one place.
+    "server": {"core", "io", "scene", "pipeline"},
+    "app": {"core", "io", "scene", "pipeline", "server"},
+    "python": {"core", "io", "scene", "pipeline"},
 }
+FRONT_DOORS = {"server", "app", "python"}
+STAGES = {"sampling", "sim", "surface", "metrics", "pose", "control"}
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([a-z_]+)/[^"]+"')
 
 
@@ -74,7 +78,10 @@ def main():
             if not m or m.group(1) == folder:
                 continue
             used.setdefault(folder, set()).add(m.group(1))
-            if m.group(1) not in ALLOWED.get(folder, set()):
+            if folder in FRONT_DOORS and m.group(1) in STAGES:
+                problems.append(f"{path.relative_to(src.parent)}:{n}: the front door {folder} includes the stage "
+                                f"{m.group(1)} directly: call a pipeline/ entry point (pipeline/front_doors.h)")
+            elif m.group(1) not in ALLOWED.get(folder, set()):
                 problems.append(f"{path.relative_to(src.parent)}:{n}: {folder} -> {m.group(1)} points up or sideways "
                                 f"({folder} may include: {', '.join(sorted(ALLOWED.get(folder, ()))) or 'nothing'})")
     circle = find_circle(used)
@@ -109,7 +116,13 @@ def self_test():
         stray = subprocess.run([sys.executable, __file__, str(copy)], capture_output=True, text=True)
         caught_stray = stray.returncode != 0 and "no place in the layer graph" in stray.stdout
         print(f"{'ok  ' if caught_stray else 'FAIL'} an undeclared folder fails the check")
-    return 0 if ok and caught and caught_stray else 1
+        shutil.rmtree(copy / "extra")
+        front = copy / "app" / "cli.cpp"
+        front.write_text('#include "sampling/samplers.h"\n' + front.read_text(encoding="utf-8"), encoding="utf-8")
+        door = subprocess.run([sys.executable, __file__, str(copy)], capture_output=True, text=True)
+        caught_door = door.returncode != 0 and "the front door app includes the stage sampling" in door.stdout
+        print(f"{'ok  ' if caught_door else 'FAIL'} a front door including a stage (app -> sampling) fails the check")
+    return 0 if ok and caught and caught_stray and caught_door else 1
 
 
 def main_on(src):
