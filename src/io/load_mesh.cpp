@@ -611,7 +611,7 @@ bool MeshTransform::is_identity() const {
 }
 
 Vec3f MeshTransform::apply(const Vec3f& p) const {
-  return (core::rotation_from_degrees(rotate_deg.cast<double>()) * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>())
+  return (core::rotation_from_degrees<double>(rotate_deg.cast<double>()) * p.cast<double>().cwiseProduct(scale.cast<double>()) + translate.cast<double>())
       .cast<float>();
 }
 
@@ -661,7 +661,7 @@ std::string import_answer(const Result<TriangleMesh>& result, const MeshLoadStat
 }
 
 void transform_mesh(TriangleMesh& mesh, const MeshTransform& t) {
-  const Eigen::Matrix3d rs = core::rotation_from_degrees(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
+  const Eigen::Matrix3d rs = core::rotation_from_degrees<double>(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
   const Vec3d shift = t.translate.cast<double>();
   for (auto& v : mesh.vertices) v = (rs * v.cast<double>() + shift).cast<float>();
   // A mirror (an odd number of negative scales, det < 0) turns every triangle inside out: reversing the winding

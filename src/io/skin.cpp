@@ -414,7 +414,7 @@ Result<std::size_t> Skin::find_clip(const std::string& name) const {
 Mat4f transform_matrix(const MeshTransform& t) {
   // As MeshTransform::apply: R = Rz · Ry · Rx from degrees (core/rotation.h), in double.
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.topLeftCorner<3, 3>() = core::rotation_from_degrees(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
+  m.topLeftCorner<3, 3>() = core::rotation_from_degrees<double>(t.rotate_deg.cast<double>()) * t.scale.cast<double>().asDiagonal();
   m.topRightCorner<3, 1>() = t.translate.cast<double>();
   return m.cast<float>();
 }

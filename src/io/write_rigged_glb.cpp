@@ -149,7 +149,7 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
     if (!v.allFinite()) return input_error("rigged glb: the mesh has a non-finite vertex");
 
   // T and its inverse, in double (MeshTransform::apply's R = Rz · Ry · Rx).
-  const Eigen::Matrix3d rot = core::rotation_from_degrees(transform.rotate_deg.cast<double>());
+  const Eigen::Matrix3d rot = core::rotation_from_degrees<double>(transform.rotate_deg.cast<double>());
   const Eigen::Matrix3d lin = rot * transform.scale.cast<double>().asDiagonal();
   const Eigen::Matrix3d lin_inv = lin.inverse();
   const Eigen::Vector3d shift = transform.translate.cast<double>();

@@ -22,7 +22,7 @@ Eigen::Affine3f Pose::rest_from_world() const {
 Pose make_pose(const Vec3f& translate, const Vec3f& rotate_deg, float scale) {
   Pose p;
   p.translate = translate;
-  p.rotation = core::rotation_from_degrees(rotate_deg.cast<double>()).cast<float>();
+  p.rotation = core::rotation_from_degrees<float>(rotate_deg);
   p.scale = scale;
   return p;
 }
