@@ -58,8 +58,8 @@ export class TargetBoxes {
     t.pose.scale = pose.scale ?? 1;
     t.group.position.set(t.pivot.x + t.pose.translate[0], t.pivot.y + t.pose.translate[1], t.pivot.z + t.pose.translate[2]);
     // The server's rotation, from the one definition it is tested against (rotation.js).
-    const r = rotationFromDegrees(t.pose.rotate);
-    this.tmpMatrix.set(r[0], r[1], r[2], 0, r[3], r[4], r[5], 0, r[6], r[7], r[8], 0, 0, 0, 0, 1);
+    const m = rotationFromDegrees(t.pose.rotate);
+    this.tmpMatrix.set(m[0], m[1], m[2], 0, m[3], m[4], m[5], 0, m[6], m[7], m[8], 0, 0, 0, 0, 1);
     t.group.quaternion.setFromRotationMatrix(this.tmpMatrix);
     t.group.scale.setScalar(t.pose.scale);
   }
