@@ -1,5 +1,5 @@
 // `fluidform keys`: every scene-file key with its type, default, range and meaning, from the parameter structs' one
-// field list each (core/fields.h). The README's table of keys is this output (a test keeps the two equal).
+// field list each (core/fields.h). The table of keys in docs/scene-keys.md is this output (a test keeps the two equal).
 #include "app/cli.h"
 #include "scene/scene.h"
 

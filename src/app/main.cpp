@@ -1,4 +1,4 @@
-// fluidform command line (DESIGN.md "The CLI and output contract"): the global flags, one sub-command per file
+// fluidform command line (docs/cli.md): the global flags, one sub-command per file
 // (cmd_*.cpp, app/cli.h), and the default run of the bundled scene when no sub-command is given.
 #include "core/simd_target.h"
 #include "app/cli.h"

@@ -97,8 +97,8 @@ void ControlSamples::flatten() {
 // Samples of moving targets follow their pose; densities keep their rest values (rigid motion keeps them exactly; a
 // scale keyframe changes the volume to fill, which the fixed amount of fluid cannot follow). u_c is the pose's
 // velocity over the sub-step (forward difference), so a rig that moves drags its fluid along. A skinned target's
-// samples are skinned first (control/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; those
-// anchored to the posed mesh (control/mesh_anchors.h) are placed from its skinned vertices instead.
+// samples are skinned first (pose/skinning.h), then posed by its keyframes: x = Pose(t) · skin(t) · x_bind; those
+// anchored to the posed mesh (pose/mesh_anchors.h) are placed from its skinned vertices instead.
 // Their densities stay the bind pose's too (measured: see bench/RESULTS.md "Animated characters").
 void ControlSamples::pose(double time, float dt) {
   std::vector<pose::Pose> now(motion_.size()), next(options_.velocities ? motion_.size() : 0);
@@ -119,7 +119,7 @@ void ControlSamples::pose(double time, float dt) {
     }
   }
   // Where a sample is (world, no keyframed pose): placed from the posed mesh, or skinned by its own weights.
-  // A sample moved out of a fold's pocket (control/cage_guard.h) jumps as it goes in and out of it: its velocity is
+  // A sample moved out of a fold's pocket (pose/cage_guard.h) jumps as it goes in and out of it: its velocity is
   // its motion without that move (measured on huesitos: with the jump in u_c, 17 % more sub-steps by the CFL rule).
   const auto skinned_at = [&](std::size_t i, const pose::PosedJoints& joints, const std::vector<Vec3f>& vertices, bool folds) {
     const Index a = anchor_[i];

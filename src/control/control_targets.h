@@ -23,12 +23,12 @@ struct ControlTarget {
   StrengthTrack strength;    ///< control strength over time (no keys: 1); 0 releases the fluid
   /// Mesh swaps (morph A → B): from each time on, the target is this sample set instead (same support H_c).
   std::vector<std::pair<double, sampling::ControlSet>> swaps;
-  /// A skinned, animated target (control/skinning.h): its skin, and the weights of every sample of `set` (the
+  /// A skinned, animated target (pose/skinning.h): its skin, and the weights of every sample of `set` (the
   /// first phase; swapped-in meshes are not skinned). Null: posed by `motion` alone.
   std::shared_ptr<const pose::TargetSkin> skin;
   std::vector<std::array<std::uint16_t, io::kMaxInfluences>> skin_joints;
   std::vector<std::array<float, io::kMaxInfluences>> skin_weights;
-  /// The samples anchored to the posed mesh (control/mesh_anchors.h: a sheet's to its triangles, a coarse closed
+  /// The samples anchored to the posed mesh (pose/mesh_anchors.h: a sheet's to its triangles, a coarse closed
   /// mesh's in it as a cage), placed from its skinned vertices instead of by their own weights. Null: by their weights.
   std::shared_ptr<const pose::MeshAnchors> anchors;
 };

@@ -1,5 +1,5 @@
 #pragma once
-// The one table of controllers (DESIGN.md `control/`). A row is a controller's parameter struct P, which carries
+// The one table of controllers (docs/ARCHITECTURE.md, "A controller"). A row is a controller's parameter struct P, which carries
 // its name, summary and approximation flag (P::info, control/controller_info.h), its field list (P::fields) and,
 // through its header, its factory make_controller(targets, ctx, const P&). Everything else — the scene reader and
 // writer, --controller, --help, `compare`, `serve` and the viewer's list — reads this table, so adding a controller

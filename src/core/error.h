@@ -1,5 +1,5 @@
 #pragma once
-// Errors are values at stage boundaries (STYLE.md §6.3): a Result<T> holds a value or an Error.
+// Errors are values at stage boundaries: a Result<T> holds a value or an Error.
 // Only app/ turns an Error into one line on stderr and an exit code. Nothing here throws.
 #include <cassert>
 #include <optional>

@@ -9,7 +9,7 @@
 //
 // and that one list drives everything that must name each field: validate_fields() here (ranges, NaN), the
 // scene reader and writer (scene/fields_json.h: unknown keys with the closest valid key, types, round trip), and
-// the table of scene keys in `fluidform keys` and the README. A field type is one of: float, double, int,
+// the table of scene keys in `fluidform keys` and docs/scene-keys.md. A field type is one of: float, double, int,
 // std::size_t, std::uint64_t, bool, std::string, std::filesystem::path, Vec3f, an enum E (with an ADL function
 // `field_choices(E)` returning its names), a struct with fields(), or a std::vector of such a struct.
 // Cross-field rules (max_iterations ≥ iterations, a box's min < max) stay in the struct's validate(), after

@@ -1,7 +1,7 @@
 #pragma once
 // Range checks for parameter structs' validate(): one message shape everywhere,
 //   "<path>.<key> = <value> is outside <range>"
-// written as !(lo <= x && x <= hi) so that NaN fails every check (STYLE.md §6.2).
+// written as !(lo <= x && x <= hi) so that NaN fails every check.
 #include "core/error.h"
 #include "core/types.h"
 

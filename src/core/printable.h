@@ -1,5 +1,5 @@
 #pragma once
-// Text from an input file quoted in an error message (STYLE.md §6.3: one line): every control character (newline,
+// Text from an input file quoted in an error message (one line): every control character (newline,
 // carriage return, tab, escape …) becomes '?', and a long quote is cut, so a message stays one printable line
 // whatever the file holds.
 #include <cstddef>

@@ -1,5 +1,5 @@
 #pragma once
-// Progress/cancel hook for long operations (OpenVDB Interrupter idea, STYLE.md §6.11).
+// Progress/cancel hook for long operations (OpenVDB Interrupter idea).
 // The CLI progress bar, the server and tests implement it; callers tick per chunk, never per particle.
 #include <cstddef>
 #include <string_view>

@@ -11,7 +11,7 @@ using Vec3f = Eigen::Vector3f;
 using Vec3d = Eigen::Vector3d;
 using Vec3i = Eigen::Vector3i;
 
-/// The one index type for particles, vertices and neighbours (STYLE.md §4.1).
+/// The one index type for particles, vertices and neighbours.
 using Index = std::uint32_t;
 inline constexpr Index kInvalidIndex = std::numeric_limits<Index>::max();
 

@@ -1,4 +1,4 @@
-// Mesh import through Assimp (DESIGN.md "io/"), from a file or (load_mesh_from_memory) from bytes in memory. The
+// Mesh import through Assimp (docs/ARCHITECTURE.md), from a file or (load_mesh_from_memory) from bytes in memory. The
 // import runs in two phases on one Importer:
 //   1. ReadFile (ReadFileFromMemory) without post-processing, then our checks on the raw scene: some vertices, all
 //      finite, some faces. Non-finite positions must be refused before post-processing, because SpatialSort (used by

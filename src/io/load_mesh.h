@@ -1,8 +1,8 @@
 #pragma once
-// Target-mesh import through Assimp (DESIGN.md "io/"): every format Assimp reads (OBJ, PLY, STL, glTF/GLB,
+// Target-mesh import through Assimp (docs/ARCHITECTURE.md): every format Assimp reads (OBJ, PLY, STL, glTF/GLB,
 // FBX, DAE, OFF, 3DS …) becomes one TriangleMesh in the file's own units, node transforms applied and all
-// meshes merged. Degenerate triangles and point/line primitives are dropped and counted (STYLE.md §6.9);
-// anything unusable is a one-line Input error naming the file (STYLE.md §6.3). Only load_mesh.cpp includes
+// meshes merged. Degenerate triangles and point/line primitives are dropped and counted;
+// anything unusable is a one-line Input error naming the file. Only load_mesh.cpp includes
 // Assimp.
 #include "core/error.h"
 #include "core/types.h"
@@ -16,7 +16,7 @@
 
 namespace ff::io {
 
-/// The most vertices a mesh may have: indices are `Index` and kInvalidIndex is reserved (STYLE.md §4.1).
+/// The most vertices a mesh may have: indices are `Index` and kInvalidIndex is reserved.
 inline constexpr std::size_t kMaxMeshVertices = std::size_t{kInvalidIndex} - 1;  // 2^32 − 2
 
 /// Scale, then rotate (degrees, about x then y then z, i.e. R = Rz*Ry*Rx), then translate:

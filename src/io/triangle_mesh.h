@@ -1,5 +1,5 @@
 #pragma once
-// The mesh type handed between stages (DESIGN.md "Data between stages").
+// The mesh type handed between stages (docs/ARCHITECTURE.md "Data between stages").
 #include "core/types.h"
 
 #include <array>

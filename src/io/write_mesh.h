@@ -1,5 +1,5 @@
 #pragma once
-// Mesh exports (DESIGN.md output contract): the editable mesh as Wavefront OBJ, the mesh animation as
+// Mesh exports (docs/outputs.md): the editable mesh as Wavefront OBJ, the mesh animation as
 // one glTF 2.0 binary (GLB), and the particles as a Blender point cache (PC2 + a frame-0 point mesh).
 //
 // Axes: fluidform simulates Y-up (gravity along −Y) in metres, which is glTF's convention (+Y up, metres) and

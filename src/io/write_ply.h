@@ -1,5 +1,5 @@
 #pragma once
-// Particle frames as binary little-endian PLY (DESIGN.md output contract): `float x y z`,
+// Particle frames as binary little-endian PLY (docs/outputs.md): `float x y z`,
 // optionally `float vx vy vz` and `uchar target`. Readable by Blender, MeshLab, Open3D, splashsurf.
 #include "core/error.h"
 #include "core/types.h"

@@ -18,7 +18,7 @@
 //         interpolators then all take the short arc, as Skin::global_matrices does). A clip without channels gets one
 //         key of the first node's rest rotation, so it keeps its name.
 // A vertex posed by a player is then Σ w_j · (T · G_j(t)) · inverse_bind[j] · T⁻¹ · x_world_bind, the world pose of
-// Skin::joint_matrices conjugated by T: what pipeline/skin_transfer.h inverts.
+// Skin::joint_matrices conjugated by T: what pose/skin_transfer.h inverts.
 #include "core/error.h"
 #include "core/types.h"
 #include "io/skin.h"

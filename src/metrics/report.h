@@ -42,7 +42,7 @@ inline constexpr std::array<Column, 11> kTargetColumns{{
     {"splash_fraction", "{:.6g}"}, {"error_spacings", "{:.6g}"},
 }};
 
-/// One row of metrics.csv (DESIGN.md output contract), its columns in kFrameColumns.
+/// One row of metrics.csv (docs/outputs.md), its columns in kFrameColumns.
 struct FrameRow {
   int frame = 0;
   double time = 0.0;              // s, simulated time at the end of the frame

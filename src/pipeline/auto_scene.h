@@ -1,5 +1,5 @@
 #pragma once
-// Completes a scene that names only its targets (DESIGN.md: the smallest scene is {"targets":[{"mesh":...}]}):
+// Completes a scene that names only its targets (docs/scenes.md: the smallest scene is {"targets":[{"mesh":...}]}):
 //   particle spacing  d = ∛(V / auto_count): the targets hold ~auto_count (10k) control samples and the fluid
 //                     as many particles (METHOD §0: d_c = d);
 //   fluid             one column per target, of the target's volume, standing on top of the target so it

@@ -1,5 +1,5 @@
 #pragma once
-// Particle frames → editable meshes and mesh animations (DESIGN.md output contract): `fluidform mesh` and the meshing at the end of
+// Particle frames → editable meshes and mesh animations (docs/outputs.md): `fluidform mesh` and the meshing at the end of
 // `run`. Reads particle PLYs, reconstructs the chosen frames (surface::reconstruct, several frames at once), and
 // writes, all atomically:
 //   OUT/mesh/frame_NNNNN.obj   one mesh per meshed frame (NNNNN: the particle frame's number)

@@ -1,6 +1,6 @@
 #pragma once
 // Samples that follow the posed mesh itself (issue 19). A skinned target's samples are normally skinned by their own
-// weights (sampling/skin_weights.h): they follow the bones' smooth blend. The target, though, is the mesh posed by its
+// weights (pose/skin_weights.h): they follow the bones' smooth blend. The target, though, is the mesh posed by its
 // vertices' weights, and linear blend skinning of a blend of vertices is not the blend of the skinned vertices: a
 // coarse mesh bends at its few vertices and cuts the corner that the samples' smooth blend goes round, so samples
 // leave it (huesitos.fbx, 62 vertices: 86 % of its samples stay inside its posed mesh; glTF2/simple_skin, a
@@ -12,7 +12,7 @@
 //    weight per vertex, summing to 1, that reproduce the sample at the bind pose and move it smoothly with the posed
 //    vertices, inside where the cage bends (though not provably: a cage folded hard can push some out, and linear
 //    blend skinning folds a coarse mesh's bends: huesitos.fbx kept 96.4 % of its samples inside at worst). So a
-//    cage can also carry a guard (control/cage_guard.h) that eases the samples its clip brings out back in.
+//    cage can also carry a guard (pose/cage_guard.h) that eases the samples its clip brings out back in.
 // A cage costs one weight per sample and vertex, so it is for coarse meshes (AnimationSpec::follow).
 #include "pose/skinning.h"
 #include "core/error.h"
@@ -36,7 +36,7 @@ struct MeshAnchors {
   std::vector<float> height;
   /// ... or in the cage (a closed mesh): sample i's weights are cage[i·V, (i+1)·V), V the vertex count.
   std::vector<float> cage;
-  /// A cage's guard (control/cage_guard.h; empty: none): the samples that the clip's poses bring near or out of the
+  /// A cage's guard (pose/cage_guard.h; empty: none): the samples that the clip's poses bring near or out of the
   /// posed mesh, each with the triangles it came near (guard_triangle[guard_begin[i], guard_begin[i+1])) and the depth
   /// guard_depth[i] below which it is eased back in; per triangle, whether its winding is outward (+1, −1) and the
   /// triangle across each edge (kInvalidIndex: a border or a non-manifold edge); per vertex, its triangles.
@@ -57,8 +57,8 @@ struct MeshAnchors {
   /// The mesh's vertices skinned by `joints` (world, posed; no keyframed pose).
   void pose_vertices(const PosedJoints& joints, std::vector<Vec3f>& out) const;
   /// Sample i on the mesh whose vertices are `posed` (pose_vertices' output, or the bind vertices); a guarded
-  /// sample is then kept inside the posed mesh (control/cage_guard.h).
-  /// `folds` false: without the move out of a fold's pocket (control/cage_guard.h), for the sample's velocity.
+  /// sample is then kept inside the posed mesh (pose/cage_guard.h).
+  /// `folds` false: without the move out of a fold's pocket (pose/cage_guard.h), for the sample's velocity.
   Vec3f place(std::size_t i, const std::vector<Vec3f>& posed, bool folds = true) const;
 };
 

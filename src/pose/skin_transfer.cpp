@@ -1,4 +1,4 @@
-// Skin weights and bind pose for the formed mesh (pipeline/skin_transfer.h).
+// Skin weights and bind pose for the formed mesh (pose/skin_transfer.h).
 #include "pose/skin_transfer.h"
 #include "pose/skin_eval.h"
 

@@ -2,7 +2,7 @@
 // Skin weights of control samples at the bind pose (issue 19 item 2): every sample of a skinned target gets the
 // four largest joint weights, renormalised, that move it with the skin.
 //
-// Two ways, measured against each other (tests/sampling/skin_weights_test.cpp, bench/RESULTS.md "Animated
+// Two ways, measured against each other (tests/pose/skin_weights_test.cpp, bench/RESULTS.md "Animated
 // characters"):
 //  - ClosestPoint: the weights interpolated (barycentric) at the closest surface point. Exact on the surface; inside,
 //    a sample takes the weights of whichever surface is nearest, so across a limb's medial axis (near a joint that

@@ -1,6 +1,6 @@
 #pragma once
 // Skinned targets (issue 19): a target whose mesh file has a skeleton plays one of its clips, and its control
-// samples follow the skin. Each sample carries skin weights at the bind pose (sampling/skin_weights.h); every
+// samples follow the skin. Each sample carries skin weights at the bind pose (pose/skin_weights.h); every
 // sub-step the joints' matrices are evaluated at the clip time and the samples posed by linear blend skinning
 // (or dual-quaternion skinning), then by the target's keyframed pose, if any:
 //   x(t) = Pose(t) · Σ_j w_j K_j(τ(t)) · x_bind,   K_j = T · G_j(τ) · inverse_bind_j · T⁻¹ (T the scene transform)
@@ -26,7 +26,7 @@ namespace ff::pose {
 
 enum class SkinningMethod { Linear, DualQuaternion };
 enum class SkinWeightSource { ClosestPoint, Diffusion };
-/// How the samples follow the posed mesh (control/mesh_anchors.h): skinned by their own weights, or anchored to the
+/// How the samples follow the posed mesh (pose/mesh_anchors.h): skinned by their own weights, or anchored to the
 /// posed mesh's vertices (an open sheet's to its triangles, a closed mesh's in it as a cage). Auto: anchored for a
 /// sheet, and for a closed mesh that is coarse (at most kCageMaxVertices vertices, and at least kCageSamplesPerVertex
 /// samples per vertex: huesitos.fbx has 62 and 160; X/anim_test.x 422 and 24, the demo character 3382 and 2.6), where

@@ -1,5 +1,5 @@
 #pragma once
-// The control particles of one target (DESIGN.md "Data between stages"): SoA with one field list, as
+// The control particles of one target (docs/ARCHITECTURE.md "Data between stages"): SoA with one field list, as
 // ParticleSet. Built by sampling/, read by the controllers; header-only so that sim/ can use the type
 // without linking the sampling stage.
 #include "core/types.h"

@@ -1,5 +1,5 @@
 #pragma once
-// Exact geometric queries on one target mesh (DESIGN.md "sampling/"): inside/outside by the generalized
+// Exact geometric queries on one target mesh (docs/ARCHITECTURE.md): inside/outside by the generalized
 // winding number, closest surface point and signed distance. Built once per target, then queried by the
 // samplers millions of times, from many threads.
 //
@@ -43,7 +43,7 @@
 
 namespace ff::sampling {
 
-/// What build() found and changed (logged by the app; STYLE.md §6.9).
+/// What build() found and changed (logged by the app).
 struct MeshFieldStats {
   std::size_t triangles = 0;             ///< triangles kept
   std::size_t dropped_degenerate = 0;    ///< zero-area triangles dropped (they add nothing to any query)

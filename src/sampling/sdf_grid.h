@@ -1,5 +1,5 @@
 #pragma once
-// The signed distance of a target mesh sampled on a regular grid (DESIGN.md "sampling/"), so that the
+// The signed distance of a target mesh sampled on a regular grid (docs/ARCHITECTURE.md), so that the
 // blue-noise relaxation (100+ steps over up to 1M samples) reads distance, outward normal and closest surface
 // point by trilinear interpolation in O(1) instead of a BVH query each.
 //

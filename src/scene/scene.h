@@ -1,5 +1,5 @@
 #pragma once
-// Scene files (JSON) → a tree of every stage's parameter structs (DESIGN.md "Scene"), and back.
+// Scene files (JSON) → a tree of every stage's parameter structs (docs/scenes.md), and back.
 //
 // {
 //   "solver":  { SolverParams fields },                       see sim/solver_params.h
@@ -48,7 +48,7 @@ struct TargetSpec {
   io::MeshTransform transform; ///< scale, rotate (degrees), translate — applied in that order
   float start = 0.0f;          ///< s, when the target starts to attract fluid. [0, 1e6]
   /// Keyframed motion after the transform (translate/rotate/scale about the target's centre), see
-  /// control/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
+  /// pose/target_motion.h: [{"time": T, "translate": [..], "rotate": [..], "scale": S}, ...].
   std::vector<pose::Keyframe> keyframes;
   Interpolation interpolation = Interpolation::Linear;  ///< between keyframes: linear, or smoothstep ("smooth")
   /// Linear RGB this target's liquid absorbs towards in the exported GLB (its water material's attenuationColor).
@@ -64,7 +64,7 @@ struct TargetSpec {
     }
   };
   std::vector<Swap> swaps;
-  /// A skinned mesh file's clip (control/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "wrap", "start",
+  /// A skinned mesh file's clip (pose/skinning.h): {"clip": NAME|INDEX, "speed", "loop", "wrap", "start",
   /// "skinning", "weights", "follow"}. Without a clip the target is not animated, as a mesh without a skin.
   pose::AnimationSpec animation;
   /// Control strength over time (control/strength.h): [{"time": T, "value": S}, ...], S in [0, 1]; none: 1.
@@ -161,7 +161,7 @@ Result<Scene> load_scene(const std::filesystem::path& file);
 /// fluid made from the targets is shared out by the volume their samples stand for, a given one by mesh volume.
 nlohmann::json scene_to_json(const Scene& scene);
 
-/// Every scene key with its type, default, range and one line ("fluidform keys", the README's table).
+/// Every scene key with its type, default, range and one line ("fluidform keys", the table in docs/scene-keys.md).
 std::vector<core::KeyRow> scene_keys();
 /// scene_keys() as a Markdown table.
 std::string scene_keys_markdown();

@@ -1,5 +1,5 @@
 #pragma once
-// The hook interface the PBF step calls (STYLE.md §5). It lives with the solver that calls it;
+// The hook interface the PBF step calls. It lives with the solver that calls it;
 // control/ implements it, so sim never includes control. Virtual at step granularity, never per particle.
 #include "core/neighbor_grid.h"
 #include "sim/particle_set.h"

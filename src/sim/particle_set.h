@@ -1,5 +1,5 @@
 #pragma once
-// The fluid particles, structure of arrays with ONE field list (STYLE.md §4.2): resize, reorder,
+// The fluid particles, structure of arrays with ONE field list: resize, reorder,
 // checkpoint and validation all iterate `for_each_array`, so adding a field is one line.
 #include "core/types.h"
 

@@ -1,5 +1,5 @@
 #pragma once
-// What an output mesh must be (DESIGN.md output contract): watertight (every edge has exactly two triangles), 2-manifold (every
+// What an output mesh must be (docs/outputs.md): watertight (every edge has exactly two triangles), 2-manifold (every
 // vertex's triangles form one fan), consistently oriented and outward (every edge used once in each direction,
 // every component encloses a positive signed volume), no degenerate triangles. Plus what tests and logs want:
 // Euler characteristic, genus and components. Used after every stage of reconstruct(), so a stage that breaks

@@ -290,7 +290,7 @@ def two_object_case():
         # Blender +y is the scene's −z; a turn about Blender's z is one about the scene's y.
         check(np.allclose(last["translate"], [0.0, 0.0, -0.3], atol=1e-5), f"two objects: last translate {last['translate']}")
         check(np.allclose(last["rotate"], [0.0, 90.0, 0.0], atol=1e-3), f"two objects: last rotate {last['rotate']}")
-        # fluidform's pose (control/target_motion.h) on the exported rest mesh reproduces Blender's sphere at every
+        # fluidform's pose (pose/target_motion.h) on the exported rest mesh reproduces Blender's sphere at every
         # keyframe: x = pivot + translate + s R (x_rest − pivot), R = R_z R_y R_x.
         rest = np.loadtxt([l for l in open(os.path.join(res["output"], "input", "target_1.obj")) if l.startswith("v ")],
                           usecols=(1, 2, 3))

@@ -1,4 +1,4 @@
-// The conformance suite every registered controller passes (STYLE.md §5), run over the registry so a new
+// The conformance suite every registered controller passes, run over the registry so a new
 // controller is covered the moment it is listed: `none` is plain PBF bit for bit; no NaN after a few hundred
 // sub-steps; bindings in range; the same bits for 1 and 2 threads; unknown or out-of-range parameters are a clear
 // error; every real controller ends closer to the target than `none`. Then one focused test per baseline of the

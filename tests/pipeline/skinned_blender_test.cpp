@@ -1,6 +1,6 @@
 // Skinning checked by an independent path (issue 19): Blender 3.4 imports the skinned file with its own importer,
 // plays the clip with its own Armature modifier (scripts/blender_pose_export.py), and the control samples that
-// fluidform posed (io/skin + control/skinning, diffusion weights, linear blending) must lie inside Blender's posed mesh:
+// fluidform posed (io/skin + pose/skinning, diffusion weights, linear blending) must lie inside Blender's posed mesh:
 // of the samples inside the bind mesh, ≥ 99 % at every time, on the walking demo character (glTF); both paths' posed
 // meshes must also agree (bounds within 1 % of the size; measured ~1e-5 %). huesitos.fbx is not a case: Blender's FBX
 // importer and Assimp pose it differently (bounds 3–7.5 % of its size apart at four clip times), so neither is a

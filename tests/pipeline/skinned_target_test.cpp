@@ -124,7 +124,7 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
   std::printf("%s: %zu samples, %.2f %% inside the bind mesh%s\n", c.name.c_str(), in_bind.size(),
               100.0 * double(n_in) / double(in_bind.size()), sheet ? " (a sheet)" : "");
   if (sk.anchors && sk.anchors->caged()) {
-    // A cage is guarded (control/cage_guard.h); what the guard adds to placing the samples, one thread, 20 poses.
+    // A cage is guarded (pose/cage_guard.h); what the guard adds to placing the samples, one thread, 20 poses.
     ASSERT_TRUE(sk.anchors->guarded());
     pose::MeshAnchors bare = *sk.anchors;
     bare.guard_begin.clear();
@@ -200,7 +200,7 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
     // Triangles the pose turns inside out (linear blend skinning folds a coarse mesh's crushed bend over itself): just
     // outside one the winding number is no longer below ½, or just inside no longer above, where at bind it was. The
     // fold's pocket is outside by the winding number though inside by its nearest triangle, and no sample placed from
-    // the mesh is sure to stay out of it (control/cage_guard.h). (At bind, a triangle inside another part, as the demo
+    // the mesh is sure to stay out of it (pose/cage_guard.h). (At bind, a triangle inside another part, as the demo
     // character's overlapping limbs have, is not a surface triangle and is not counted.)
     int folded = 0;
     for (const auto& tri : posed.triangles) {
@@ -230,8 +230,8 @@ TEST_P(Skinned, PosedSamplesLieInsideThePosedMeshThroughTheClip) {
     // surface is the linear interpolation of a few far-apart posed vertices, which cuts the corners of every bend; it
     // folds three triangles inside out at t = 0.39 s (winding −1 and −2 beside them) and three into the body at
     // 0.78 s. Skinned by their own weights its samples followed the smooth blend of the bones (86 % stayed inside);
-    // held in the mesh as a cage (control/mesh_anchors.h) 96.4 % did at worst; eased in by its guard
-    // (control/cage_guard.h) 97.8 % and 99.3 % where the mesh folds, 100 % elsewhere; with the folds' samples moved
+    // held in the mesh as a cage (pose/mesh_anchors.h) 96.4 % did at worst; eased in by its guard
+    // (pose/cage_guard.h) 97.8 % and 99.3 % where the mesh folds, 100 % elsewhere; with the folds' samples moved
     // to their partners, 100 % at all five times.
     EXPECT_GE(frac, 0.99) << c.name << " at t = " << time << ", " << folded << " triangles folded";
     // huesitos folds at these two times only; anim_test never.

@@ -1,4 +1,4 @@
-// The cage's guard (control/cage_guard.h): the closest feature of a triangle is its closest point, and on a coarse bar
+// The cage's guard (pose/cage_guard.h): the closest feature of a triangle is its closest point, and on a coarse bar
 // bent through its clip the guarded cage keeps the samples inside the bent mesh where the cage alone lets some out,
 // moves none at the bind pose but those nearer the surface than the least guard depth, and poses them smoothly.
 #include "pose/cage_guard.h"

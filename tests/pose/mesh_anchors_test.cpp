@@ -1,4 +1,4 @@
-// Samples anchored to the posed mesh (control/mesh_anchors.h). An open sheet's ride their posed triangles: at the bind
+// Samples anchored to the posed mesh (pose/mesh_anchors.h). An open sheet's ride their posed triangles: at the bind
 // pose every sample is placed where it was; posed, it lies on the posed sheet, where skinning it by its interpolated
 // weights would leave it; and control::ControlSamples poses anchored samples so, with their velocity the placement's forward
 // difference. A closed mesh's sit in it as a cage (mean value coordinates): reproduced exactly at bind, and inside the

@@ -1,4 +1,4 @@
-// Skin transfer onto the formed mesh (pipeline/skin_transfer.h), on hand-built skins (tests/support/skin_bar.h): a
+// Skin transfer onto the formed mesh (pose/skin_transfer.h), on hand-built skins (tests/support/skin_bar.h): a
 // rigid joint, where the bind position is exactly the inverse motion; the bending bar, where an inflated copy of the
 // posed target must get the target's weights and land on the inflated bind shape; a singular blend, which must fall
 // back to the dominant joint; one-line errors; the rigged GLB of a transferred mesh played in three.js at the time it
