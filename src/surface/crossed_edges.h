@@ -107,4 +107,49 @@ inline void place_edge_vertex(const SparseField& f, const std::array<std::int64_
   cell = std::uint64_t((g[2] * nd[1] + g[1]) * nd[0] + g[0]);
 }
 
+/// Pass 1 of both extractions: marks in `edges` the owned edges of every kept block that φ crosses, then indexes
+/// them. Edge q of node (i, j, k) (edge id node · N + q) runs to the node one step further along each axis whose bit
+/// is set in steps[q]. Returns the number of crossed edges (vertices).
+template <std::size_t N>
+std::uint64_t mark_crossed_edges(const SparseField& field, const std::array<int, N>& steps,
+                                 CrossedEdges<int(N)>& edges) {
+  constexpr int kB = SparseField::kBlockCells;
+  const float iso = field.iso;
+  for_each_block(std::int64_t(field.keys.size()), [&](std::int64_t b) {
+    const float* v = field.values[std::size_t(b)].data();
+    std::uint64_t* w = edges.block_bits(b);
+    for (int k = 0; k < kB; ++k)
+      for (int j = 0; j < kB; ++j)
+        for (int i = 0; i < kB; ++i) {
+          const bool in0 = v[SparseField::local(i, j, k)] > iso;
+          for (int q = 0; q < int(N); ++q) {
+            const int s = steps[std::size_t(q)];
+            if (in0 != (v[SparseField::local(i + (s & 1), j + ((s >> 1) & 1), k + ((s >> 2) & 1))] > iso))
+              CrossedEdges<int(N)>::mark(w, ((k * kB + j) * kB + i) * int(N) + q);
+          }
+        }
+  });
+  return edges.index();
+}
+
+/// Pass 1b of both: every crossed edge's vertex position and regularisation cell (the nearer node), in bit order,
+/// into positions[id] and cells[id].
+template <std::size_t N>
+void place_crossed_vertices(const SparseField& field, const std::array<int, N>& steps,
+                            const CrossedEdges<int(N)>& edges, std::vector<Vec3f>& positions,
+                            std::vector<std::uint64_t>& cells) {
+  constexpr int kB = SparseField::kBlockCells;
+  for_each_block(std::int64_t(field.keys.size()), [&](std::int64_t b) {
+    const float* v = field.values[std::size_t(b)].data();
+    const auto c = field.block_coords(field.keys[std::size_t(b)]);
+    edges.for_each_crossed(b, [&](int e, std::uint64_t id) {
+      const int s = steps[std::size_t(e % int(N))], node = e / int(N);
+      const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
+      const int step[3] = {s & 1, (s >> 1) & 1, (s >> 2) & 1};
+      place_edge_vertex(field, c, l, step, v[SparseField::local(l[0], l[1], l[2])],
+                        v[SparseField::local(l[0] + step[0], l[1] + step[1], l[2] + step[2])], positions[id], cells[id]);
+    });
+  });
+}
+
 }  // namespace ff::surface

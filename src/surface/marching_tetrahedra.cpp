@@ -20,6 +20,7 @@ using Edges = CrossedEdges<kDirs>;                    // 3584 owned edges per bl
 
 // Edge s − 1 of own node (i, j, k) of a block.
 constexpr int node_edge(int i, int j, int k, int s) { return ((k * kB + j) * kB + i) * kDirs + (s - 1); }
+constexpr std::array<int, kDirs> kSteps = {1, 2, 3, 4, 5, 6, 7};  // edge s − 1 of a node: to the node + s
 
 // A tetrahedron edge from cube corner `lo` to corner lo | dir (corner c sits at (c & 1, c >> 1 & 1, c >> 2 & 1)).
 // In the Kuhn subdivision one end of every edge is a subset of the other, so every edge runs "upwards".
@@ -98,11 +99,68 @@ const TetTable& tet_table() {
   return table;
 }
 
+// Pass 2 for block b: its cells' triangles, six tetrahedra per cube, edge vertices looked up in their owning blocks
+// (`pos` their positions); `broken` is set when one is missing.
+void triangulate_block(const SparseField& field, const TetTable& table, std::int64_t b, const Edges& edges,
+                       const std::vector<std::array<std::int64_t, 8>>& up, const std::vector<Vec3f>& pos,
+                       std::vector<std::array<Index, 3>>& bt, std::atomic<bool>& broken) {
+  const float iso = field.iso;
+  const float* v = field.values[std::size_t(b)].data();
+  auto vertex_of = [&](int i, int j, int k, const TetEdge& te) -> Index {
+    const std::int64_t id = cell_edge_vertex(edges, up[std::size_t(b)], i, j, k, te.lo,
+                                             [&](const int* n) { return node_edge(n[0], n[1], n[2], te.dir); });
+    if (id < 0) {
+      broken = true;
+      return 0;
+    }
+    return Index(id);
+  };
+  for (int k = 0; k < kB; ++k)
+    for (int j = 0; j < kB; ++j)
+      for (int i = 0; i < kB; ++i) {
+        int mask = 0;
+        for (int c = 0; c < 8; ++c)
+          mask |= int(v[SparseField::local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] > iso) << c;
+        if (mask == 0 || mask == 255) continue;
+        // Up to 19 edges of the cube (12 cube edges, 6 face diagonals, the main diagonal) are shared by its
+        // tetrahedra: look each up once. Slot lo · 8 + dir.
+        std::array<Index, 64> ref{};
+        std::uint64_t have = 0;
+        auto vertex = [&](const TetEdge& te) {
+          const int slot = te.lo * 8 + te.dir;
+          if (!((have >> slot) & 1)) {
+            ref[std::size_t(slot)] = vertex_of(i, j, k, te);
+            have |= std::uint64_t(1) << slot;
+          }
+          return ref[std::size_t(slot)];
+        };
+        for (int t = 0; t < 6; ++t) {
+          const auto& tc4 = table.corners[std::size_t(t)];
+          int m = 0;
+          for (int q = 0; q < 4; ++q) m |= ((mask >> tc4[std::size_t(q)]) & 1) << q;
+          const TetCase& tc = table.cases[std::size_t(t)][std::size_t(m)];
+          if (tc.n == 0) continue;
+          Index r[4];
+          for (int q = 0; q < tc.n; ++q) r[q] = vertex(tc.e[std::size_t(q)]);
+          if (broken.load(std::memory_order_relaxed)) return;
+          if (tc.n == 3) {
+            bt.push_back({r[0], r[1], r[2]});
+          } else if ((pos[r[1]] - pos[r[3]]).squaredNorm() < (pos[r[0]] - pos[r[2]]).squaredNorm()) {
+            // The quad's shorter diagonal: better shaped triangles (either is inside the tetrahedron).
+            bt.push_back({r[1], r[2], r[3]});
+            bt.push_back({r[1], r[3], r[0]});
+          } else {
+            bt.push_back({r[0], r[1], r[2]});
+            bt.push_back({r[0], r[2], r[3]});
+          }
+        }
+      }
+}
+
 }  // namespace
 
 Result<McMesh> marching_tetrahedra(const SparseField& field) {
   const auto nb = std::int64_t(field.keys.size());
-  const float iso = field.iso;
   const TetTable& table = tet_table();
 
   // Kept neighbours at +x, +y, +z and their combinations (index = dx + 2 dy + 4 dz), −1 when absent.
@@ -110,21 +168,7 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
 
   // --- pass 1: which owned edges are crossed (the 7 edges from each node [0, 8)³ of the block) ---------------------
   Edges edges(field.keys.size());
-  for_each_block(nb, [&](std::int64_t b) {
-    const float* v = field.values[std::size_t(b)].data();
-    std::uint64_t* w = edges.block_bits(b);
-    for (int k = 0; k < kB; ++k)
-      for (int j = 0; j < kB; ++j)
-        for (int i = 0; i < kB; ++i) {
-          const bool in0 = v[SparseField::local(i, j, k)] > iso;
-          for (int s = 1; s < 8; ++s)
-            if (in0 != (v[SparseField::local(i + (s & 1), j + ((s >> 1) & 1), k + ((s >> 2) & 1))] > iso)) {
-              const int e = node_edge(i, j, k, s);
-              Edges::mark(w, e);
-            }
-        }
-  });
-  const std::uint64_t vertices = edges.index();
+  const std::uint64_t vertices = mark_crossed_edges(field, kSteps, edges);
   if (vertices >= (std::uint64_t(1) << 31))
     return numerical_error(fmt::format("surface: {} marching-tetrahedra vertices exceed 2^31", vertices));
 
@@ -133,75 +177,13 @@ Result<McMesh> marching_tetrahedra(const SparseField& field) {
   out.cluster.resize(vertices);
 
   // --- pass 1b: vertex positions and regularisation cells (Treece et al.'s nearer node), in bit order -------------
-  for_each_block(nb, [&](std::int64_t b) {
-    const float* v = field.values[std::size_t(b)].data();
-    const auto c = field.block_coords(field.keys[std::size_t(b)]);
-    edges.for_each_crossed(b, [&](int e, std::uint64_t id) {
-      const int s = e % kDirs + 1, node = e / kDirs;
-      const int l[3] = {node % kB, (node / kB) % kB, node / (kB * kB)};
-      const int step[3] = {s & 1, (s >> 1) & 1, (s >> 2) & 1};
-      place_edge_vertex(field, c, l, step, v[SparseField::local(l[0], l[1], l[2])],
-                        v[SparseField::local(l[0] + step[0], l[1] + step[1], l[2] + step[2])], out.mesh.vertices[id],
-                        out.cluster[id]);
-    });
-  });
+  place_crossed_vertices(field, kSteps, edges, out.mesh.vertices, out.cluster);
 
   // --- pass 2: triangles per block, vertices looked up in the owning block --------------------------------------
   std::vector<std::vector<std::array<Index, 3>>> tris(field.keys.size());
   std::atomic<bool> broken{false};
-  const auto& pos = out.mesh.vertices;
   for_each_block(nb, [&](std::int64_t b) {
-    const float* v = field.values[std::size_t(b)].data();
-    auto& bt = tris[std::size_t(b)];
-    auto vertex_of = [&](int i, int j, int k, const TetEdge& te) -> Index {
-      const std::int64_t id = cell_edge_vertex(edges, up[std::size_t(b)], i, j, k, te.lo,
-                                               [&](const int* n) { return node_edge(n[0], n[1], n[2], te.dir); });
-      if (id < 0) {
-        broken = true;
-        return 0;
-      }
-      return Index(id);
-    };
-    for (int k = 0; k < kB; ++k)
-      for (int j = 0; j < kB; ++j)
-        for (int i = 0; i < kB; ++i) {
-          int mask = 0;
-          for (int c = 0; c < 8; ++c)
-            mask |= int(v[SparseField::local(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] > iso) << c;
-          if (mask == 0 || mask == 255) continue;
-          // Up to 19 edges of the cube (12 cube edges, 6 face diagonals, the main diagonal) are shared by its
-          // tetrahedra: look each up once. Slot lo · 8 + dir.
-          std::array<Index, 64> ref{};
-          std::uint64_t have = 0;
-          auto vertex = [&](const TetEdge& te) {
-            const int slot = te.lo * 8 + te.dir;
-            if (!((have >> slot) & 1)) {
-              ref[std::size_t(slot)] = vertex_of(i, j, k, te);
-              have |= std::uint64_t(1) << slot;
-            }
-            return ref[std::size_t(slot)];
-          };
-          for (int t = 0; t < 6; ++t) {
-            const auto& tc4 = table.corners[std::size_t(t)];
-            int m = 0;
-            for (int q = 0; q < 4; ++q) m |= ((mask >> tc4[std::size_t(q)]) & 1) << q;
-            const TetCase& tc = table.cases[std::size_t(t)][std::size_t(m)];
-            if (tc.n == 0) continue;
-            Index r[4];
-            for (int q = 0; q < tc.n; ++q) r[q] = vertex(tc.e[std::size_t(q)]);
-            if (broken.load(std::memory_order_relaxed)) return;
-            if (tc.n == 3) {
-              bt.push_back({r[0], r[1], r[2]});
-            } else if ((pos[r[1]] - pos[r[3]]).squaredNorm() < (pos[r[0]] - pos[r[2]]).squaredNorm()) {
-              // The quad's shorter diagonal: better shaped triangles (either is inside the tetrahedron).
-              bt.push_back({r[1], r[2], r[3]});
-              bt.push_back({r[1], r[3], r[0]});
-            } else {
-              bt.push_back({r[0], r[1], r[2]});
-              bt.push_back({r[0], r[2], r[3]});
-            }
-          }
-        }
+    triangulate_block(field, table, b, edges, up, out.mesh.vertices, tris[std::size_t(b)], broken);
   });
   if (broken)
     return numerical_error("surface: marching tetrahedra found an edge missing from its block (internal error)");
