@@ -153,6 +153,19 @@ int NeighborGrid::neighbor_keys(const Vec3i& c, Index* keys) const {
 void NeighborGrid::build(std::span<const Vec3f> points) {
   const std::size_t n = points.size();
   const int T = static_cast<std::int64_t>(n) < kMinParallel ? 1 : thread_count();
+  const std::size_t cell_count = place_cells(points, T);
+  key_.resize(n);
+  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) {
+    const Vec3f& p = points[static_cast<std::size_t>(i)];
+    Vec3i c = p.allFinite() ? cell_of(p) : Vec3i(0, 0, 0);
+    if (!hashed_) c = c.cwiseMax(Vec3i::Zero()).cwiseMin(dims_ - Vec3i::Ones());
+    key_[static_cast<std::size_t>(i)] = key_of(c);
+  });
+  sort_by_cell(cell_count, T);
+}
+
+std::size_t NeighborGrid::place_cells(std::span<const Vec3f> points, int T) {
+  const std::size_t n = points.size();
   // Bounding box of the points (min/max are exact in any order, so per-thread boxes merge
   // deterministically); non-finite coordinates are the solver's to report, they land in cell 0.
   std::vector<Aabb> boxes(static_cast<std::size_t>(T));
@@ -191,15 +204,11 @@ void NeighborGrid::build(std::span<const Vec3f> points) {
     hash_mask_ = static_cast<Index>(table - 1);
     cell_count = table;
   }
+  return cell_count;
+}
 
-  key_.resize(n);
-  parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t i) {
-    const Vec3f& p = points[static_cast<std::size_t>(i)];
-    Vec3i c = p.allFinite() ? cell_of(p) : Vec3i(0, 0, 0);
-    if (!hashed_) c = c.cwiseMax(Vec3i::Zero()).cwiseMin(dims_ - Vec3i::Ones());
-    key_[static_cast<std::size_t>(i)] = key_of(c);
-  });
-
+void NeighborGrid::sort_by_cell(std::size_t cell_count, int T) {
+  const std::size_t n = key_.size();
   // Stable counting sort with one cell table: thread t owns the cells [cb, ce) and scans all keys, counting
   // and then placing only its own cells' points. Points of a cell keep ascending order, so the result is
   // the serial stable sort for any thread count, and memory is one counter per cell (per-thread
@@ -261,26 +270,7 @@ void NeighborGrid::gather(std::span<const Vec3f> binned, std::span<const Vec3f> 
   const int T = static_cast<std::int64_t>(n) < kMinParallel ? 1 : thread_count();
   const std::size_t chunk = std::max<std::size_t>(1, (n + static_cast<std::size_t>(T) - 1) / static_cast<std::size_t>(T));
   const std::size_t segments = std::max<std::size_t>(1, (n + chunk - 1) / chunk);
-  out.count = n;
-  out.chunk = chunk;
-  out.chunk_inverse = ~std::uint64_t(0) / chunk + 1;
-  out.compact = kCompact;
-  out.offset.resize(segments);
-  // Release the other representation so bytes() is what the list really holds.
-  if constexpr (kCompact) {
-    out.code.resize(segments);
-    std::vector<Buffer<Index>>().swap(out.index);
-    out.cell_key = key_.data();
-    out.cell_start = cell_start_.data();
-    const std::int64_t nx = dims_.x(), nxy = std::int64_t(dims_.x()) * dims_.y();
-    int k = 0;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy) out.row_key[static_cast<std::size_t>(k++)] = -1 + dy * nx + dz * nxy;
-  } else {
-    out.index.resize(segments);
-    std::vector<Buffer<std::uint16_t>>().swap(out.code);
-    out.cell_key = out.cell_start = nullptr;
-  }
+  prepare_list<kCompact>(n, chunk, segments, out);
   const float r2 = r * r;
 #pragma omp parallel for schedule(static, 1) num_threads(T)
   for (std::int64_t s = 0; s < static_cast<std::int64_t>(segments); ++s) {
@@ -352,6 +342,30 @@ void NeighborGrid::gather(std::span<const Vec3f> binned, std::span<const Vec3f> 
     }
     off[e - b] = static_cast<Index>(used);
     if constexpr (kCompact) codes->resize(used); else wide->resize(used);  // keeps the capacity
+  }
+}
+
+template <bool kCompact>
+void NeighborGrid::prepare_list(std::size_t n, std::size_t chunk, std::size_t segments, NeighborList& out) const {
+  out.count = n;
+  out.chunk = chunk;
+  out.chunk_inverse = ~std::uint64_t(0) / chunk + 1;
+  out.compact = kCompact;
+  out.offset.resize(segments);
+  // Release the other representation so bytes() is what the list really holds.
+  if constexpr (kCompact) {
+    out.code.resize(segments);
+    std::vector<Buffer<Index>>().swap(out.index);
+    out.cell_key = key_.data();
+    out.cell_start = cell_start_.data();
+    const std::int64_t nx = dims_.x(), nxy = std::int64_t(dims_.x()) * dims_.y();
+    int k = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy) out.row_key[static_cast<std::size_t>(k++)] = -1 + dy * nx + dz * nxy;
+  } else {
+    out.index.resize(segments);
+    std::vector<Buffer<std::uint16_t>>().swap(out.code);
+    out.cell_key = out.cell_start = nullptr;
   }
 }
 

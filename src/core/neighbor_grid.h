@@ -179,8 +179,17 @@ class NeighborGrid {
   int neighbor_keys(const Vec3i& c, Index* keys) const;
   Index key_of(const Vec3i& c) const;
 
+  // build(), step 1: the points' box gives the origin and the key space (dense or hashed); returns the cell count.
+  std::size_t place_cells(std::span<const Vec3f> points, int T);
+  // build(), step 3: the stable parallel counting sort of the points' keys into sorted_ and cell_start_.
+  void sort_by_cell(std::size_t cell_count, int T);
+
   template <bool kSelf, bool kCompact>
   void gather(std::span<const Vec3f> binned, std::span<const Vec3f> queries, float r, NeighborList& out) const;
+  // gather(), step 1: sizes `out` for n queries in `segments` segments of `chunk` (one thread's share) and points it
+  // at this grid's cell table when compact.
+  template <bool kCompact>
+  void prepare_list(std::size_t n, std::size_t chunk, std::size_t segments, NeighborList& out) const;
 
   float radius_;
   Vec3f origin_{Vec3f::Zero()};
