@@ -138,6 +138,78 @@ bool read_as_off(const fs::path& path, std::string_view head) {
   return ext == ".off" || is_off_keyword(next_token(head, i));
 }
 
+/// A cursor over an OFF file that moves the way Assimp's OFF reader and its parsing helpers do.
+struct OffCursor {
+  std::string_view text;
+  std::size_t end = 0;  // Assimp's copy of the file ends with a NUL, and its parsing stops at the first NUL in it
+  std::size_t p = 0;
+  std::size_t line_number = 0;
+  bool too_long = false;
+
+  explicit OffCursor(std::string_view t) : text(t), end(t.size() + 1) {}
+  char at(std::size_t k) const { return k < text.size() ? text[k] : '\0'; }
+  static bool line_end(char c) { return c == '\r' || c == '\n' || c == '\0' || c == '\f'; }
+  void skip_spaces_and_line_end() {
+    while (at(p) == ' ' || at(p) == '\t' || at(p) == '\r' || at(p) == '\n') ++p;
+  }
+  void skip_line() {
+    while (at(p) != '\r' && at(p) != '\n' && at(p) != '\0') ++p;
+    while (at(p) == '\r' || at(p) == '\n') ++p;
+  }
+  void token() {  // OFFLoader's NextToken
+    skip_spaces_and_line_end();
+    while (p < end && (at(p) == '#' || at(p) == '\n' || at(p) == '\r')) skip_line(), skip_spaces_and_line_end();
+  }
+  std::uint32_t number(std::size_t& k) const {  // strtoul10, wrapping like Assimp's unsigned int
+    std::uint32_t v = 0;
+    while (at(k) >= '0' && at(k) <= '9') v = v * 10u + static_cast<std::uint32_t>(at(k++) - '0');
+    return v;
+  }
+  bool next_line(std::string_view& line) {  // GetNextLine into char[4096]
+    if (at(p) == '\0') return false;
+    const std::size_t b = p;
+    while (!line_end(at(p)) && p - b < 4096) ++p;
+    too_long = too_long || p - b == 4096;
+    line = text.substr(b, p - b);
+    while (line_end(at(p)) && at(p) != '\0') ++p;
+    ++line_number;
+    return true;
+  }
+};
+
+/// The vertex and face counts of an OFF header as Assimp reads them (wrapped to 32 bits), the cursor left after
+/// them; nullopt where Assimp refuses the header itself.
+std::optional<std::pair<std::uint32_t, std::uint32_t>> read_off_counts(OffCursor& c) {
+  std::size_t& p = c.p;
+  const std::size_t end = c.end;
+  c.token();
+  bool dimension = false;
+  if (p + 2 < end && c.at(p) == 'S' && c.at(p + 1) == 'T') p += 2;
+  if (p + 1 < end && c.at(p) == 'C') ++p;
+  if (p + 1 < end && c.at(p) == 'N') ++p;
+  if (p + 1 < end && c.at(p) == '4') ++p;
+  if (p + 1 < end && c.at(p) == 'n') dimension = true, ++p;
+  if (p + 3 < end && c.at(p) == 'O' && c.at(p + 1) == 'F' && c.at(p + 2) == 'F') {
+    p += 3;
+    c.token();
+  } else {
+    c.token();
+    if (p + 1 >= end || c.at(p) < '0' || c.at(p) > '9') return std::nullopt;  // Assimp: "Header is invalid"
+  }
+  if (dimension) {
+    if (c.number(p) > 3) return std::nullopt;  // Assimp: "higher than 3 unsupported"
+    c.token();
+  }
+  c.token();
+  const std::uint32_t vertices = c.number(p);
+  c.token();
+  const std::uint32_t faces = c.number(p);
+  c.token();
+  c.number(p);  // edges
+  c.token();
+  return std::pair{vertices, faces};
+}
+
 /// Assimp 5.2.5's OFF reader, as far as it counts faces (code/AssetLib/OFF/OFFLoader.cpp, on the helpers of
 /// ParsingUtils.h): it drops a face line whose vertex count is 0 or over 9 by decrementing the mesh's face count, once
 /// per such line and without counting the line, so more of them than the header's faces wrap the count round and
@@ -147,65 +219,10 @@ Status check_off_lines(const fs::path& path, std::string_view text) {
   if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // Assimp drops a UTF-8 byte order mark
   if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF") || text.starts_with(std::string_view("\0\0\xFE\xFF", 4)))
     return file_error(path, "OFF in UTF-16 or UTF-32 is not supported");
-  // Assimp's copy of the file ends with a NUL, and its parsing stops at the first NUL in it.
-  const std::size_t end = text.size() + 1;
-  std::size_t p = 0;
-  const auto at = [&](std::size_t k) { return k < text.size() ? text[k] : '\0'; };
-  const auto line_end = [](char c) { return c == '\r' || c == '\n' || c == '\0' || c == '\f'; };
-  const auto skip_spaces_and_line_end = [&] {
-    while (at(p) == ' ' || at(p) == '\t' || at(p) == '\r' || at(p) == '\n') ++p;
-  };
-  const auto skip_line = [&] {
-    while (at(p) != '\r' && at(p) != '\n' && at(p) != '\0') ++p;
-    while (at(p) == '\r' || at(p) == '\n') ++p;
-  };
-  const auto token = [&] {  // OFFLoader's NextToken
-    skip_spaces_and_line_end();
-    while (p < end && (at(p) == '#' || at(p) == '\n' || at(p) == '\r')) skip_line(), skip_spaces_and_line_end();
-  };
-  const auto number = [&](std::size_t& k) {  // strtoul10, wrapping like Assimp's unsigned int
-    std::uint32_t v = 0;
-    while (at(k) >= '0' && at(k) <= '9') v = v * 10u + static_cast<std::uint32_t>(at(k++) - '0');
-    return v;
-  };
-  std::size_t line_number = 0;
-  bool too_long = false;
-  const auto next_line = [&](std::string_view& line) {  // GetNextLine into char[4096]
-    if (at(p) == '\0') return false;
-    const std::size_t b = p;
-    while (!line_end(at(p)) && p - b < 4096) ++p;
-    too_long = too_long || p - b == 4096;
-    line = text.substr(b, p - b);
-    while (line_end(at(p)) && at(p) != '\0') ++p;
-    ++line_number;
-    return true;
-  };
-
-  token();
-  bool dimension = false;
-  if (p + 2 < end && at(p) == 'S' && at(p + 1) == 'T') p += 2;
-  if (p + 1 < end && at(p) == 'C') ++p;
-  if (p + 1 < end && at(p) == 'N') ++p;
-  if (p + 1 < end && at(p) == '4') ++p;
-  if (p + 1 < end && at(p) == 'n') dimension = true, ++p;
-  if (p + 3 < end && at(p) == 'O' && at(p + 1) == 'F' && at(p + 2) == 'F') {
-    p += 3;
-    token();
-  } else {
-    token();
-    if (p + 1 >= end || at(p) < '0' || at(p) > '9') return {};  // Assimp: "Header is invalid"
-  }
-  if (dimension) {
-    if (number(p) > 3) return {};  // Assimp: "higher than 3 unsupported"
-    token();
-  }
-  token();
-  const std::uint32_t vertices = number(p);
-  token();
-  const std::uint32_t faces = number(p);
-  token();
-  number(p);  // edges
-  token();
+  OffCursor cur(text);
+  const auto counts = read_off_counts(cur);
+  if (!counts) return {};
+  const auto [vertices, faces] = *counts;
   if (vertices == 0 || faces == 0) return {};  // Assimp refuses these itself
   // The counts as Assimp reads them (after a byte order mark, wrapped to 32 bits), which is what it allocates for
   // before reading a line: each vertex and each face takes at least one byte of the file.
@@ -217,12 +234,12 @@ Status check_off_lines(const fs::path& path, std::string_view text) {
                                         text.size()));
 
   std::string_view line;
-  for (std::uint32_t v = 0; v < vertices && next_line(line);) ++v;
+  for (std::uint32_t v = 0; v < vertices && cur.next_line(line);) ++v;
   std::uint64_t dropped = 0;
-  for (std::uint32_t f = 0; f < faces && next_line(line);) {
+  for (std::uint32_t f = 0; f < faces && cur.next_line(line);) {
     std::size_t k = static_cast<std::size_t>(line.data() - text.data());  // SkipSpaces, then strtoul10
-    while (at(k) == ' ' || at(k) == '\t') ++k;
-    const std::uint32_t n = number(k);
+    while (cur.at(k) == ' ' || cur.at(k) == '\t') ++k;
+    const std::uint32_t n = cur.number(k);
     if (n >= 1 && n <= 9) {
       ++f;
     } else if (++dropped > faces) {
@@ -230,7 +247,7 @@ Status check_off_lines(const fs::path& path, std::string_view text) {
                                           "faces", dropped, faces));
     }
   }
-  if (too_long) return file_error(path, "has a line of 4096 characters or more (more than the OFF reader takes)");
+  if (cur.too_long) return file_error(path, "has a line of 4096 characters or more (more than the OFF reader takes)");
   return {};
 }
 

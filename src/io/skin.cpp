@@ -78,6 +78,172 @@ struct Influences {
   std::vector<std::pair<float, int>> w;  // (weight, joint)
 };
 
+/// The joint of (node, inverse bind): one per pair, shared by meshes that agree on it.
+Result<int> joint_for(const fs::path& path, Skin& skin, int node, const Mat4f& inverse_bind) {
+  for (std::size_t j = 0; j < skin.joint_nodes.size(); ++j)
+    if (skin.joint_nodes[j] == node && skin.inverse_bind[j].isApprox(inverse_bind, 1e-6f)) return static_cast<int>(j);
+  if (skin.joint_nodes.size() >= 65535) return skin_error(path, "more than 65535 joints");
+  skin.joint_nodes.push_back(node);
+  skin.inverse_bind.push_back(inverse_bind);
+  return static_cast<int>(skin.joint_nodes.size() - 1);
+}
+
+/// The raw vertices of the file's meshes: bind position in the world and influences.
+struct RawVertices {
+  std::vector<Vec3f> position;
+  std::vector<Influences> influence;
+};
+
+/// The bones of mesh m (on node n, global rest matrix G) as influences of its raw vertices from `base` on.
+Status add_bone_weights(const fs::path& path, const aiMesh* m, std::size_t base, std::size_t n, const Mat4f& G_inv,
+                        const Flattened& f, Skin& skin, RawVertices& raw) {
+  for (unsigned b = 0; b < m->mNumBones; ++b) {
+    const aiBone* bone = m->mBones[b];
+    const Mat4f offset = to_eigen(bone->mOffsetMatrix);
+    if (!finite(offset)) return skin_error(path, fmt::format("bone '{}' has a non-finite offset matrix", bone->mName.C_Str()));
+    const auto it = f.by_name.find(bone->mName.C_Str());
+    int j = -1;
+    if (it == f.by_name.end()) {
+      // A bone without its node (assimp-testmodels' X/anim_test.x has two): nothing moves it, so its vertices
+      // keep their place on the mesh's node, as a viewer that finds no node for a bone shows them.
+      skin.warnings.push_back(fmt::format("bone '{}' names no node of the file: its vertices follow the mesh's node '{}'",
+                                          bone->mName.C_Str(), f.nodes[n].name));
+      FF_TRY(j, joint_for(path, skin, static_cast<int>(n), G_inv));
+    } else {
+      FF_TRY(j, joint_for(path, skin, it->second, Mat4f(offset * G_inv)));
+    }
+    for (unsigned i = 0; i < bone->mNumWeights; ++i) {
+      const aiVertexWeight& vw = bone->mWeights[i];
+      if (!std::isfinite(vw.mWeight) || vw.mWeight < 0.0f)
+        return skin_error(path, fmt::format("bone '{}' has weight {} (not a finite number ≥ 0)", bone->mName.C_Str(), vw.mWeight));
+      if (vw.mVertexId >= m->mNumVertices)
+        return skin_error(path, fmt::format("bone '{}' weights vertex {} of a mesh with {}", bone->mName.C_Str(),
+                                            vw.mVertexId, m->mNumVertices));
+      if (vw.mWeight > 0.0f) raw.influence[base + vw.mVertexId].w.emplace_back(vw.mWeight, j);
+    }
+  }
+  return {};
+}
+
+/// Raw vertices: bind position in the world and influences, mesh by mesh, node by node (instances repeat).
+Status gather_raw_vertices(const fs::path& path, const aiScene* scene, const Flattened& f,
+                           const std::vector<Mat4f>& rest, const Mat4f& T, Skin& skin, RawVertices& raw) {
+  for (std::size_t n = 0; n < f.nodes.size(); ++n) {
+    const aiNode* node = f.source[n];
+    const Mat4f G = rest[n];
+    if (!finite(G)) return skin_error(path, fmt::format("node '{}' has a non-finite global transform", f.nodes[n].name));
+    const Mat4f G_inv = G.inverse();
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+      const aiMesh* m = scene->mMeshes[node->mMeshes[k]];
+      if (m == nullptr || !(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+      const std::size_t base = raw.position.size();
+      raw.position.resize(base + m->mNumVertices);
+      raw.influence.resize(base + m->mNumVertices);
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        const aiVector3D& p = m->mVertices[v];
+        const Eigen::Vector4f w = T * (G * Eigen::Vector4f(p.x, p.y, p.z, 1.0f));
+        raw.position[base + v] = w.head<3>();
+      }
+      FF_CHECK(add_bone_weights(path, m, base, n, G_inv, f, skin, raw));
+      // Vertices no bone reaches follow their node rigidly.
+      int rigid = -1;
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        if (!raw.influence[base + v].w.empty()) continue;
+        if (rigid < 0) {
+          FF_TRY(rigid, joint_for(path, skin, static_cast<int>(n), G_inv));  // x(t) = G_n(t) · G_n(rest)⁻¹ · x_bind
+        }
+        raw.influence[base + v].w.emplace_back(1.0f, rigid);
+      }
+    }
+  }
+  return {};
+}
+
+/// load_mesh's vertices take their raw vertex's weights: the 4 largest, renormalised.
+void take_nearest_weights(const TriangleMesh& mesh, const RawVertices& raw, Skin& skin) {
+  const core::PointTree tree(raw.position);
+  skin.joints.resize(mesh.vertices.size());
+  skin.weights.resize(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const auto near = tree.nearest(mesh.vertices[v]);
+    auto w = raw.influence[tree.original(near.slot)].w;
+    std::sort(w.begin(), w.end(), [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+    if (w.size() > kMaxInfluences) w.resize(kMaxInfluences);
+    double sum = 0.0;
+    for (const auto& [wt, j] : w) sum += wt;
+    skin.joints[v].fill(0);
+    skin.weights[v].fill(0.0f);
+    for (std::size_t k = 0; k < w.size(); ++k) {
+      skin.joints[v][k] = static_cast<std::uint16_t>(w[k].second);
+      skin.weights[v][k] = static_cast<float>(w[k].first / sum);
+    }
+  }
+}
+
+/// One channel of clip `clip_name` (tps ticks per second): its keys in seconds, later keys at an equal or earlier time
+/// dropped (keys must increase).
+Result<NodeChannel> read_channel(const fs::path& path, const aiNodeAnim* ch, int node, const std::string& clip_name,
+                                 double tps) {
+  NodeChannel nc;
+  nc.node = node;
+  auto time = [&](double ticks, const char* what) -> Result<double> {
+    if (!std::isfinite(ticks)) return skin_error(path, fmt::format("clip '{}' has a non-finite {} key time", clip_name, what));
+    return ticks / tps;
+  };
+  for (unsigned k = 0; k < ch->mNumPositionKeys; ++k) {
+    FF_TRY(const double t, time(ch->mPositionKeys[k].mTime, "position"));
+    const auto& p = ch->mPositionKeys[k].mValue;
+    if (!nc.translation_times.empty() && t <= nc.translation_times.back()) continue;  // keys must increase
+    nc.translation_times.push_back(t);
+    nc.translations.emplace_back(p.x, p.y, p.z);
+  }
+  for (unsigned k = 0; k < ch->mNumRotationKeys; ++k) {
+    FF_TRY(const double t, time(ch->mRotationKeys[k].mTime, "rotation"));
+    const auto& q = ch->mRotationKeys[k].mValue;
+    if (!nc.rotation_times.empty() && t <= nc.rotation_times.back()) continue;
+    nc.rotation_times.push_back(t);
+    nc.rotations.push_back(Quatf(q.w, q.x, q.y, q.z).normalized());
+  }
+  for (unsigned k = 0; k < ch->mNumScalingKeys; ++k) {
+    FF_TRY(const double t, time(ch->mScalingKeys[k].mTime, "scale"));
+    const auto& s = ch->mScalingKeys[k].mValue;
+    if (!nc.scale_times.empty() && t <= nc.scale_times.back()) continue;
+    nc.scale_times.push_back(t);
+    nc.scales.emplace_back(s.x, s.y, s.z);
+  }
+  for (const auto& v : nc.translations)
+    if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite position key", clip_name));
+  for (const auto& q : nc.rotations)
+    if (!q.coeffs().allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite rotation key", clip_name));
+  for (const auto& v : nc.scales)
+    if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite scale key", clip_name));
+  return nc;
+}
+
+/// Clips: keys in ticks → seconds (25 ticks per second where the file does not say, as Assimp's viewer).
+Status read_clips(const fs::path& path, const aiScene* scene, const Flattened& f, Skin& skin) {
+  for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
+    const aiAnimation* anim = scene->mAnimations[a];
+    const double tps = anim->mTicksPerSecond > 0.0 ? anim->mTicksPerSecond : 25.0;
+    AnimationClip clip;
+    clip.name = anim->mName.C_Str();
+    double last = 0.0;
+    for (unsigned c = 0; c < anim->mNumChannels; ++c) {
+      const aiNodeAnim* ch = anim->mChannels[c];
+      const auto it = f.by_name.find(ch->mNodeName.C_Str());
+      if (it == f.by_name.end()) continue;  // a channel for a node the file lacks moves nothing
+      FF_TRY(NodeChannel nc, read_channel(path, ch, it->second, clip.name, tps));
+      for (const auto* times : {&nc.translation_times, &nc.rotation_times, &nc.scale_times})
+        if (!times->empty()) last = std::max(last, times->back());
+      clip.channels.push_back(std::move(nc));
+    }
+    const double said = std::isfinite(anim->mDuration) ? anim->mDuration / tps : 0.0;
+    clip.duration = std::max(said, last);
+    skin.clips.push_back(std::move(clip));
+  }
+  return {};
+}
+
 Result<std::optional<Skin>> load_skin_impl(const fs::path& path, const TriangleMesh& mesh, const MeshTransform& transform) {
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
@@ -96,144 +262,11 @@ Result<std::optional<Skin>> load_skin_impl(const fs::path& path, const TriangleM
   skin.rest_matrices(rest);
   const Mat4f T = transform_matrix(transform);
 
-  // Joints: one per (node, inverse bind) pair, shared by meshes that agree on it.
-  auto joint_for = [&](int node, const Mat4f& inverse_bind) -> Result<int> {
-    for (std::size_t j = 0; j < skin.joint_nodes.size(); ++j)
-      if (skin.joint_nodes[j] == node && skin.inverse_bind[j].isApprox(inverse_bind, 1e-6f)) return static_cast<int>(j);
-    if (skin.joint_nodes.size() >= 65535) return skin_error(path, "more than 65535 joints");
-    skin.joint_nodes.push_back(node);
-    skin.inverse_bind.push_back(inverse_bind);
-    return static_cast<int>(skin.joint_nodes.size() - 1);
-  };
-
-  // Raw vertices: bind position in the world and influences, mesh by mesh, node by node (instances repeat).
-  std::vector<Vec3f> raw_position;
-  std::vector<Influences> raw_influence;
-  for (std::size_t n = 0; n < f.nodes.size(); ++n) {
-    const aiNode* node = f.source[n];
-    const Mat4f G = rest[n];
-    if (!finite(G)) return skin_error(path, fmt::format("node '{}' has a non-finite global transform", f.nodes[n].name));
-    const Mat4f G_inv = G.inverse();
-    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-      const aiMesh* m = scene->mMeshes[node->mMeshes[k]];
-      if (m == nullptr || !(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-      const std::size_t base = raw_position.size();
-      raw_position.resize(base + m->mNumVertices);
-      raw_influence.resize(base + m->mNumVertices);
-      for (unsigned v = 0; v < m->mNumVertices; ++v) {
-        const aiVector3D& p = m->mVertices[v];
-        const Eigen::Vector4f w = T * (G * Eigen::Vector4f(p.x, p.y, p.z, 1.0f));
-        raw_position[base + v] = w.head<3>();
-      }
-      for (unsigned b = 0; b < m->mNumBones; ++b) {
-        const aiBone* bone = m->mBones[b];
-        const Mat4f offset = to_eigen(bone->mOffsetMatrix);
-        if (!finite(offset)) return skin_error(path, fmt::format("bone '{}' has a non-finite offset matrix", bone->mName.C_Str()));
-        const auto it = f.by_name.find(bone->mName.C_Str());
-        int j = -1;
-        if (it == f.by_name.end()) {
-          // A bone without its node (assimp-testmodels' X/anim_test.x has two): nothing moves it, so its vertices
-          // keep their place on the mesh's node, as a viewer that finds no node for a bone shows them.
-          skin.warnings.push_back(fmt::format("bone '{}' names no node of the file: its vertices follow the mesh's node '{}'",
-                                              bone->mName.C_Str(), f.nodes[n].name));
-          FF_TRY(j, joint_for(static_cast<int>(n), G_inv));
-        } else {
-          FF_TRY(j, joint_for(it->second, Mat4f(offset * G_inv)));
-        }
-        for (unsigned i = 0; i < bone->mNumWeights; ++i) {
-          const aiVertexWeight& vw = bone->mWeights[i];
-          if (!std::isfinite(vw.mWeight) || vw.mWeight < 0.0f)
-            return skin_error(path, fmt::format("bone '{}' has weight {} (not a finite number ≥ 0)", bone->mName.C_Str(), vw.mWeight));
-          if (vw.mVertexId >= m->mNumVertices)
-            return skin_error(path, fmt::format("bone '{}' weights vertex {} of a mesh with {}", bone->mName.C_Str(),
-                                                vw.mVertexId, m->mNumVertices));
-          if (vw.mWeight > 0.0f) raw_influence[base + vw.mVertexId].w.emplace_back(vw.mWeight, j);
-        }
-      }
-      // Vertices no bone reaches follow their node rigidly.
-      int rigid = -1;
-      for (unsigned v = 0; v < m->mNumVertices; ++v) {
-        if (!raw_influence[base + v].w.empty()) continue;
-        if (rigid < 0) {
-          FF_TRY(rigid, joint_for(static_cast<int>(n), G_inv));  // x(t) = G_n(t) · G_n(rest)⁻¹ · x_bind
-        }
-        raw_influence[base + v].w.emplace_back(1.0f, rigid);
-      }
-    }
-  }
-  if (raw_position.empty()) return skin_error(path, "has bones but no triangle mesh");
-
-  // load_mesh's vertices take their raw vertex's weights: the 4 largest, renormalised.
-  const core::PointTree tree(raw_position);
-  skin.joints.resize(mesh.vertices.size());
-  skin.weights.resize(mesh.vertices.size());
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const auto near = tree.nearest(mesh.vertices[v]);
-    auto w = raw_influence[tree.original(near.slot)].w;
-    std::sort(w.begin(), w.end(), [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
-    if (w.size() > kMaxInfluences) w.resize(kMaxInfluences);
-    double sum = 0.0;
-    for (const auto& [wt, j] : w) sum += wt;
-    skin.joints[v].fill(0);
-    skin.weights[v].fill(0.0f);
-    for (std::size_t k = 0; k < w.size(); ++k) {
-      skin.joints[v][k] = static_cast<std::uint16_t>(w[k].second);
-      skin.weights[v][k] = static_cast<float>(w[k].first / sum);
-    }
-  }
-
-  // Clips: keys in ticks → seconds (25 ticks per second where the file does not say, as Assimp's viewer).
-  for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
-    const aiAnimation* anim = scene->mAnimations[a];
-    const double tps = anim->mTicksPerSecond > 0.0 ? anim->mTicksPerSecond : 25.0;
-    AnimationClip clip;
-    clip.name = anim->mName.C_Str();
-    double last = 0.0;
-    for (unsigned c = 0; c < anim->mNumChannels; ++c) {
-      const aiNodeAnim* ch = anim->mChannels[c];
-      const auto it = f.by_name.find(ch->mNodeName.C_Str());
-      if (it == f.by_name.end()) continue;  // a channel for a node the file lacks moves nothing
-      NodeChannel nc;
-      nc.node = it->second;
-      auto time = [&](double ticks, const char* what) -> Result<double> {
-        if (!std::isfinite(ticks)) return skin_error(path, fmt::format("clip '{}' has a non-finite {} key time", clip.name, what));
-        return ticks / tps;
-      };
-      for (unsigned k = 0; k < ch->mNumPositionKeys; ++k) {
-        FF_TRY(const double t, time(ch->mPositionKeys[k].mTime, "position"));
-        const auto& p = ch->mPositionKeys[k].mValue;
-        if (!nc.translation_times.empty() && t <= nc.translation_times.back()) continue;  // keys must increase
-        nc.translation_times.push_back(t);
-        nc.translations.emplace_back(p.x, p.y, p.z);
-      }
-      for (unsigned k = 0; k < ch->mNumRotationKeys; ++k) {
-        FF_TRY(const double t, time(ch->mRotationKeys[k].mTime, "rotation"));
-        const auto& q = ch->mRotationKeys[k].mValue;
-        if (!nc.rotation_times.empty() && t <= nc.rotation_times.back()) continue;
-        nc.rotation_times.push_back(t);
-        nc.rotations.push_back(Quatf(q.w, q.x, q.y, q.z).normalized());
-      }
-      for (unsigned k = 0; k < ch->mNumScalingKeys; ++k) {
-        FF_TRY(const double t, time(ch->mScalingKeys[k].mTime, "scale"));
-        const auto& s = ch->mScalingKeys[k].mValue;
-        if (!nc.scale_times.empty() && t <= nc.scale_times.back()) continue;
-        nc.scale_times.push_back(t);
-        nc.scales.emplace_back(s.x, s.y, s.z);
-      }
-      for (const auto& v : nc.translations)
-        if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite position key", clip.name));
-      for (const auto& q : nc.rotations)
-        if (!q.coeffs().allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite rotation key", clip.name));
-      for (const auto& v : nc.scales)
-        if (!v.allFinite()) return skin_error(path, fmt::format("clip '{}' has a non-finite scale key", clip.name));
-      for (const auto* times : {&nc.translation_times, &nc.rotation_times, &nc.scale_times})
-        if (!times->empty()) last = std::max(last, times->back());
-      clip.channels.push_back(std::move(nc));
-    }
-    const double said = std::isfinite(anim->mDuration) ? anim->mDuration / tps : 0.0;
-    clip.duration = std::max(said, last);
-    skin.clips.push_back(std::move(clip));
-  }
+  RawVertices raw;
+  FF_CHECK(gather_raw_vertices(path, scene, f, rest, T, skin, raw));
+  if (raw.position.empty()) return skin_error(path, "has bones but no triangle mesh");
+  take_nearest_weights(mesh, raw, skin);
+  FF_CHECK(read_clips(path, scene, f, skin));
   return std::optional<Skin>(std::move(skin));
 }
 

@@ -72,23 +72,34 @@ Status write_particles_ply(const std::filesystem::path& path, const ParticleFram
 }
 
 namespace {
-/// The reader behind read_particles_ply and decode_particles_ply; `file` stands for the file in messages.
-Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
+/// A particle PLY's header: the vertex count, its properties (name, bytes) and comments.
+struct PlyHeader {
+  struct Prop { std::string name; int size; };
+  std::size_t n = 0;
+  std::vector<Prop> props;
+  std::vector<std::string> comments;
+};
+
+/// Where a record holds x y z, vx vy vz (−1: absent) and the target byte (−1: absent), and its size.
+struct PlyLayout {
+  int ix = -1, ivx = -1, itg = -1;
+  std::size_t stride = 0;
+};
+
+/// The header up to end_header; a particle PLY is binary little-endian with one vertex element.
+Result<PlyHeader> read_header(std::istream& in, std::string_view file) {
   std::string line;
   std::getline(in, line);
   if (line != "ply") return input_error(fmt::format("{}: not a PLY file", file));
-  std::size_t n = 0;
+  PlyHeader h;
   bool in_vertex = false, binary_le = false;
-  struct Prop { std::string name; int size; };
-  std::vector<Prop> props;
-  std::vector<std::string> comments;
   while (std::getline(in, line)) {
     if (line == "end_header") break;
     std::istringstream ls(line);
     std::string word;
     ls >> word;
     if (word == "comment") {
-      comments.push_back(line.size() > 8 ? line.substr(8) : std::string());
+      h.comments.push_back(line.size() > 8 ? line.substr(8) : std::string());
     } else if (word == "format") {
       std::string fmt_name;
       ls >> fmt_name;
@@ -97,60 +108,60 @@ Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
       std::string name;
       ls >> name;
       in_vertex = name == "vertex";
-      if (in_vertex) ls >> n;
+      if (in_vertex) ls >> h.n;
       else return input_error(fmt::format("{}: unexpected element '{}' in a particle PLY", file, printable(name)));
     } else if (word == "property" && in_vertex) {
       std::string type, name;
       ls >> type >> name;
-      if (type == "float" || type == "float32") props.push_back({name, 4});
-      else if (type == "uchar" || type == "uint8") props.push_back({name, 1});
+      if (type == "float" || type == "float32") h.props.push_back({name, 4});
+      else if (type == "uchar" || type == "uint8") h.props.push_back({name, 1});
       else return input_error(fmt::format("{}: unsupported property type '{}'", file, printable(type)));
     }
   }
   if (!binary_le) return input_error(fmt::format("{}: particle PLY must be binary_little_endian", file));
-  int ix = -1, ivx = -1, itg = -1, off = 0;
+  return h;
+}
+
+/// The record layout of `props`: x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply.
+Result<PlyLayout> record_layout(const std::vector<PlyHeader::Prop>& props, std::string_view file) {
+  PlyLayout l;
+  int off = 0;
   std::size_t kx = props.size(), kvx = props.size();
   for (std::size_t k = 0; k < props.size(); ++k) {
     const auto& p = props[k];
-    if (p.name == "x") ix = off, kx = k;
-    if (p.name == "vx") ivx = off, kvx = k;
-    if (p.name == "target") itg = off;
+    if (p.name == "x") l.ix = off, kx = k;
+    if (p.name == "vx") l.ivx = off, kvx = k;
+    if (p.name == "target") l.itg = off;
     if (p.name == "target" && p.size != 1) return input_error(fmt::format("{}: property 'target' must be a uchar", file));
     off += p.size;
   }
-  // x y z (and vx vy vz) must be consecutive floats, as written by write_particles_ply: each triple is read as one.
+  // Each triple is read as one.
   const auto float_triple = [&](std::size_t k, const char* a, const char* b, const char* c) {
     return k + 2 < props.size() && props[k].name == a && props[k + 1].name == b && props[k + 2].name == c &&
            props[k].size == 4 && props[k + 1].size == 4 && props[k + 2].size == 4;
   };
-  if (ix < 0) return input_error(fmt::format("{}: no x y z properties", file));
+  if (l.ix < 0) return input_error(fmt::format("{}: no x y z properties", file));
   if (!float_triple(kx, "x", "y", "z"))
     return input_error(fmt::format("{}: x y z must be three consecutive float properties", file));
-  if (ivx >= 0 && !float_triple(kvx, "vx", "vy", "vz"))
+  if (l.ivx >= 0 && !float_triple(kvx, "vx", "vy", "vz"))
     return input_error(fmt::format("{}: vx vy vz must be three consecutive float properties", file));
-  const std::size_t stride = static_cast<std::size_t>(off);
-  // A header may claim any count: check it against the file before allocating.
-  const auto here = in.tellg();
-  in.seekg(0, std::ios::end);
-  const auto size = static_cast<std::uint64_t>(in.tellg() - here);
-  in.seekg(here);
-  if (stride == 0 || n > size / stride)
-    return input_error(fmt::format("{}: truncated ({} bytes of particle data for {} particles of {} bytes)",
-                                   file, size, n, stride));
-  std::vector<char> buf(n * stride);
-  in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-  if (static_cast<std::size_t>(in.gcount()) != buf.size())
-    return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", file, in.gcount(), buf.size()));
+  l.stride = static_cast<std::size_t>(off);
+  return l;
+}
+
+/// The n records of `buf` unpacked; every other float property is kept by name.
+ParticleFrame unpack_records(const std::vector<char>& buf, PlyHeader& h, const PlyLayout& l) {
+  const std::size_t n = h.n, stride = l.stride;
+  const int ix = l.ix, ivx = l.ivx, itg = l.itg;
   ParticleFrame f;
-  f.comments = std::move(comments);
+  f.comments = std::move(h.comments);
   f.positions.resize(n);
   if (ivx >= 0) f.velocities.resize(n);
   if (itg >= 0) f.targets.resize(n);
-  // Every other float property is kept by name.
   std::vector<int> scalar_offset;
   {
     int o = 0;
-    for (const auto& p : props) {
+    for (const auto& p : h.props) {
       const bool known = p.name == "x" || p.name == "y" || p.name == "z" || p.name == "target" ||
                          (ivx >= 0 && (p.name == "vx" || p.name == "vy" || p.name == "vz"));
       if (!known && p.size == 4) {
@@ -169,6 +180,26 @@ Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
       std::memcpy(&f.scalars[s].second[i], rec + scalar_offset[s], 4);
   }
   return f;
+}
+
+/// The reader behind read_particles_ply and decode_particles_ply; `file` stands for the file in messages.
+Result<ParticleFrame> read_particles(std::istream& in, std::string_view file) {
+  FF_TRY(PlyHeader h, read_header(in, file));
+  FF_TRY(const PlyLayout layout, record_layout(h.props, file));
+  const std::size_t n = h.n, stride = layout.stride;
+  // A header may claim any count: check it against the file before allocating.
+  const auto here = in.tellg();
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<std::uint64_t>(in.tellg() - here);
+  in.seekg(here);
+  if (stride == 0 || n > size / stride)
+    return input_error(fmt::format("{}: truncated ({} bytes of particle data for {} particles of {} bytes)",
+                                   file, size, n, stride));
+  std::vector<char> buf(n * stride);
+  in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+  if (static_cast<std::size_t>(in.gcount()) != buf.size())
+    return input_error(fmt::format("{}: truncated ({} of {} bytes of particle data)", file, in.gcount(), buf.size()));
+  return unpack_records(buf, h, layout);
 }
 }  // namespace
 

@@ -129,12 +129,10 @@ Status clean_influences(std::array<std::uint16_t, kMaxInfluences>& j, std::array
   return {};
 }
 
-}  // namespace
-
-Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
-                                                    const std::vector<std::array<std::uint16_t, kMaxInfluences>>& joints,
-                                                    const std::vector<std::array<float, kMaxInfluences>>& weights,
-                                                    const Skin& skin, const MeshTransform& transform, const Vec3f& tint) {
+/// The mesh and its influences as encode_rigged_glb takes them: sizes agree, indices in range, vertices finite.
+Status check_rig_input(const TriangleMesh& mesh, const std::vector<std::array<std::uint16_t, kMaxInfluences>>& joints,
+                       const std::vector<std::array<float, kMaxInfluences>>& weights, const Skin& skin,
+                       const MeshTransform& transform) {
   if (auto s = transform.validate(); !s) return input_error("rigged glb: " + s.error().message);
   FF_CHECK(check_skin(skin));
   const std::size_t nv = mesh.vertices.size();
@@ -147,48 +145,67 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
       if (v >= nv) return input_error(fmt::format("rigged glb: a triangle refers to vertex {} of {}", v, nv));
   for (const auto& v : mesh.vertices)
     if (!v.allFinite()) return input_error("rigged glb: the mesh has a non-finite vertex");
+  return {};
+}
 
+/// The mesh in the file's scene space: T = translate · R · scale (R = Rz · Ry · Rx, as MeshTransform::apply) undone.
+struct FileSpace {
+  Eigen::Matrix3d rot;
+  std::vector<Vec3f> pos, nrm;
+  Aabb file_box, world_box;
+};
+
+FileSpace to_file_space(const TriangleMesh& mesh, const MeshTransform& transform) {
+  const std::size_t nv = mesh.vertices.size();
+  FileSpace f;
   // T and its inverse, in double (MeshTransform::apply's R = Rz · Ry · Rx).
-  const Eigen::Matrix3d rot = core::rotation_from_degrees<double>(transform.rotate_deg.cast<double>());
-  const Eigen::Matrix3d lin = rot * transform.scale.cast<double>().asDiagonal();
+  f.rot = core::rotation_from_degrees<double>(transform.rotate_deg.cast<double>());
+  const Eigen::Matrix3d lin = f.rot * transform.scale.cast<double>().asDiagonal();
   const Eigen::Matrix3d lin_inv = lin.inverse();
   const Eigen::Vector3d shift = transform.translate.cast<double>();
 
   // Vertices in the file's scene space; normals outward in the world after T (n_file ∝ Lᵀ n_world, the inverse
   // transpose of T⁻¹'s linear part, which also undoes a mirror's reversal).
   const std::vector<Vec3f> world_normals = vertex_normals(mesh);
-  std::vector<Vec3f> pos(nv), nrm(nv);
-  Aabb file_box, world_box = mesh.bounds();
+  f.pos.resize(nv), f.nrm.resize(nv);
+  f.world_box = mesh.bounds();
   for (std::size_t i = 0; i < nv; ++i) {
-    pos[i] = (lin_inv * (mesh.vertices[i].cast<double>() - shift)).cast<float>();
-    file_box.extend(pos[i]);
+    f.pos[i] = (lin_inv * (mesh.vertices[i].cast<double>() - shift)).cast<float>();
+    f.file_box.extend(f.pos[i]);
     const Eigen::Vector3d n = lin.transpose() * world_normals[i].cast<double>();
-    nrm[i] = n.norm() > 0.0 ? Vec3f(n.normalized().cast<float>()) : Vec3f(0.0f, 1.0f, 0.0f);
+    f.nrm[i] = n.norm() > 0.0 ? Vec3f(n.normalized().cast<float>()) : Vec3f(0.0f, 1.0f, 0.0f);
   }
-  std::vector<std::array<std::uint16_t, kMaxInfluences>> jo = joints;
-  std::vector<std::array<float, kMaxInfluences>> we = weights;
-  for (std::size_t i = 0; i < nv; ++i) FF_CHECK(clean_influences(jo[i], we[i], skin.joint_nodes.size(), i));
+  return f;
+}
 
-  GlbBuilder b;
+/// The primitive's vertex attributes (positions, normals, joints, weights) in `b`.
+json vertex_attributes(GlbBuilder& b, const FileSpace& f, const std::vector<std::array<std::uint16_t, kMaxInfluences>>& jo,
+                       const std::vector<std::array<float, kMaxInfluences>>& we) {
+  const std::size_t nv = f.pos.size();
   json attributes;
-  attributes["POSITION"] = b.accessor(b.view(pos.data(), nv * sizeof(Vec3f), glb::kArrayBuffer), glb::kFloat, nv, "VEC3",
-                                      vec3(file_box.min), vec3(file_box.max));
-  attributes["NORMAL"] = b.accessor(b.view(nrm.data(), nv * sizeof(Vec3f), glb::kArrayBuffer), glb::kFloat, nv, "VEC3");
+  attributes["POSITION"] = b.accessor(b.view(f.pos.data(), nv * sizeof(Vec3f), glb::kArrayBuffer), glb::kFloat, nv,
+                                      "VEC3", vec3(f.file_box.min), vec3(f.file_box.max));
+  attributes["NORMAL"] = b.accessor(b.view(f.nrm.data(), nv * sizeof(Vec3f), glb::kArrayBuffer), glb::kFloat, nv, "VEC3");
   attributes["JOINTS_0"] = b.accessor(b.view(jo.data(), nv * sizeof(jo[0]), glb::kArrayBuffer), glb::kUnsignedShort, nv, "VEC4");
   attributes["WEIGHTS_0"] = b.accessor(b.view(we.data(), nv * sizeof(we[0]), glb::kArrayBuffer), glb::kFloat, nv, "VEC4");
-  int indices = 0;
-  if (nv <= 65535) {
+  return attributes;
+}
+
+/// The triangle indices' accessor in `b`: 16-bit while the vertices fit, 32-bit beyond.
+int index_accessor(GlbBuilder& b, const TriangleMesh& mesh) {
+  if (mesh.vertices.size() <= 65535) {
     std::vector<std::uint16_t> idx;
     idx.reserve(3 * mesh.triangles.size());
     for (const auto& t : mesh.triangles)
       for (Index v : t) idx.push_back(static_cast<std::uint16_t>(v));
-    indices = b.accessor(b.view(idx.data(), idx.size() * 2, glb::kElementArrayBuffer), glb::kUnsignedShort, idx.size(), "SCALAR");
-  } else {
-    indices = b.accessor(b.view(mesh.triangles.data(), mesh.triangles.size() * 12, glb::kElementArrayBuffer),
-                         glb::kUnsignedInt, 3 * mesh.triangles.size(), "SCALAR");
+    return b.accessor(b.view(idx.data(), idx.size() * 2, glb::kElementArrayBuffer), glb::kUnsignedShort, idx.size(), "SCALAR");
   }
+  return b.accessor(b.view(mesh.triangles.data(), mesh.triangles.size() * 12, glb::kElementArrayBuffer),
+                    glb::kUnsignedInt, 3 * mesh.triangles.size(), "SCALAR");
+}
 
-  // Nodes: 0 the rig root (T), 1 … n the skeleton, n + 1 the skinned mesh.
+/// Nodes: 0 the rig root (T), 1 … n the skeleton, n + 1 the skinned mesh.
+json rig_nodes(const Skin& skin, const MeshTransform& transform, const Eigen::Matrix3d& rot) {
   const std::size_t nn = skin.nodes.size();
   json nodes = json::array();
   const Eigen::Quaterniond rq(rot);
@@ -209,9 +226,12 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
     if (!children[n].empty()) node["children"] = children[n];
     nodes.push_back(node);
   }
-  const std::size_t mesh_node = nodes.size();
   nodes.push_back({{"name", "fluidform_mesh"}, {"mesh", 0}, {"skin", 0}});
+  return nodes;
+}
 
+/// The skin: its joints (node index + 1) and their inverse bind matrices (affine) in `b`.
+json rig_skins(GlbBuilder& b, const Skin& skin) {
   std::vector<Mat4f> ibm(skin.inverse_bind);
   json joint_list = json::array();
   for (std::size_t j = 0; j < ibm.size(); ++j) {
@@ -220,77 +240,116 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
   }
   // Eigen stores column-major, as glTF's MAT4.
   const int ibm_accessor = b.accessor(b.view(ibm.data(), ibm.size() * sizeof(Mat4f)), glb::kFloat, ibm.size(), "MAT4");
-  json skins = json::array({{{"name", "fluidform_skin"}, {"inverseBindMatrices", ibm_accessor}, {"joints", joint_list},
-                             {"skeleton", 0}}});
+  return json::array({{{"name", "fluidform_skin"}, {"inverseBindMatrices", ibm_accessor}, {"joints", joint_list},
+                       {"skeleton", 0}}});
+}
 
-  // Clips.
+/// One clip's samplers and channels as they are added, their key data in `b`.
+struct ClipWriter {
+  GlbBuilder& b;
+  json channels = json::array(), samplers = json::array();
+
+  void add(std::size_t node, const char* path, const std::vector<float>& t, const float* values, int width) {
+    const int in = b.accessor(b.view(t.data(), t.size() * 4), glb::kFloat, t.size(), "SCALAR", {t.front()}, {t.back()});
+    const int out = b.accessor(b.view(values, t.size() * static_cast<std::size_t>(width) * 4), glb::kFloat, t.size(),
+                               width == 4 ? "VEC4" : "VEC3");
+    samplers.push_back({{"input", in}, {"output", out}, {"interpolation", "LINEAR"}});
+    channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", node + 1}, {"path", path}}}});
+  }
+};
+
+/// One node channel of clip `name`: its translation, rotation (on the short arc from key to key) and scale keys.
+Status add_channel(ClipWriter& w, const Skin& skin, const AnimationClip& clip, const std::string& name,
+                   const NodeChannel& ch) {
+  const std::size_t nn = skin.nodes.size();
+  if (ch.node < 0 || static_cast<std::size_t>(ch.node) >= nn)
+    return input_error(fmt::format("rigged glb: clip '{}' animates node {} of {}", name, ch.node, nn));
+  const auto node = static_cast<std::size_t>(ch.node);
+  const std::string what = fmt::format("clip '{}' node '{}'", name, skin.nodes[node].name);
+  std::vector<float> t;
+  std::vector<Vec3f> v3;
+  std::vector<Quatf> q;
+  for (const auto* p : {&ch.translations, &ch.scales})
+    for (const Vec3f& v : *p)
+      if (!v.allFinite()) return input_error(fmt::format("rigged glb: {} has a non-finite key", what));
+  for (const Quatf& r : ch.rotations)
+    if (!finite_quat(r)) return input_error(fmt::format("rigged glb: {} has a non-finite or zero rotation key", what));
+  FF_CHECK(clean_keys(ch.translation_times, ch.translations, clip.duration, what + " translation", t, v3));
+  if (!t.empty()) {
+    std::vector<float> flat;
+    for (const Vec3f& v : v3) flat.insert(flat.end(), {v.x(), v.y(), v.z()});
+    w.add(node, "translation", t, flat.data(), 3);
+  }
+  FF_CHECK(clean_keys(ch.rotation_times, ch.rotations, clip.duration, what + " rotation", t, q));
+  if (!t.empty()) {
+    std::vector<float> flat;
+    Quatf prev = Quatf::Identity();
+    for (std::size_t k = 0; k < q.size(); ++k) {
+      Quatf n = q[k].normalized();
+      if (k && n.dot(prev) < 0.0f) n.coeffs() = -n.coeffs();  // the same rotation, on the short arc from the last
+      prev = n;
+      flat.insert(flat.end(), {n.x(), n.y(), n.z(), n.w()});
+    }
+    w.add(node, "rotation", t, flat.data(), 4);
+  }
+  FF_CHECK(clean_keys(ch.scale_times, ch.scales, clip.duration, what + " scale", t, v3));
+  if (!t.empty()) {
+    std::vector<float> flat;
+    for (const Vec3f& v : v3) flat.insert(flat.end(), {v.x(), v.y(), v.z()});
+    w.add(node, "scale", t, flat.data(), 3);
+  }
+  return {};
+}
+
+/// The clips as glTF animations, their keys in `b`.
+Result<json> rig_animations(GlbBuilder& b, const Skin& skin) {
+  const std::size_t nn = skin.nodes.size();
   json animations = json::array();
   for (std::size_t c = 0; c < skin.clips.size(); ++c) {
     const AnimationClip& clip = skin.clips[c];
     const std::string name = clip.name.empty() ? fmt::format("clip_{}", c) : clip.name;
     if (!std::isfinite(clip.duration)) return input_error(fmt::format("rigged glb: clip '{}' has a non-finite duration", name));
-    json channels = json::array(), samplers = json::array();
-    auto add = [&](std::size_t node, const char* path, const std::vector<float>& t, const float* values, int width) {
-      const int in = b.accessor(b.view(t.data(), t.size() * 4), glb::kFloat, t.size(), "SCALAR", {t.front()}, {t.back()});
-      const int out = b.accessor(b.view(values, t.size() * static_cast<std::size_t>(width) * 4), glb::kFloat, t.size(),
-                                 width == 4 ? "VEC4" : "VEC3");
-      samplers.push_back({{"input", in}, {"output", out}, {"interpolation", "LINEAR"}});
-      channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", node + 1}, {"path", path}}}});
-    };
-    for (const NodeChannel& ch : clip.channels) {
-      if (ch.node < 0 || static_cast<std::size_t>(ch.node) >= nn)
-        return input_error(fmt::format("rigged glb: clip '{}' animates node {} of {}", name, ch.node, nn));
-      const auto node = static_cast<std::size_t>(ch.node);
-      const std::string what = fmt::format("clip '{}' node '{}'", name, skin.nodes[node].name);
-      std::vector<float> t;
-      std::vector<Vec3f> v3;
-      std::vector<Quatf> q;
-      for (const auto* p : {&ch.translations, &ch.scales})
-        for (const Vec3f& v : *p)
-          if (!v.allFinite()) return input_error(fmt::format("rigged glb: {} has a non-finite key", what));
-      for (const Quatf& r : ch.rotations)
-        if (!finite_quat(r)) return input_error(fmt::format("rigged glb: {} has a non-finite or zero rotation key", what));
-      FF_CHECK(clean_keys(ch.translation_times, ch.translations, clip.duration, what + " translation", t, v3));
-      if (!t.empty()) {
-        std::vector<float> flat;
-        for (const Vec3f& v : v3) flat.insert(flat.end(), {v.x(), v.y(), v.z()});
-        add(node, "translation", t, flat.data(), 3);
-      }
-      FF_CHECK(clean_keys(ch.rotation_times, ch.rotations, clip.duration, what + " rotation", t, q));
-      if (!t.empty()) {
-        std::vector<float> flat;
-        Quatf prev = Quatf::Identity();
-        for (std::size_t k = 0; k < q.size(); ++k) {
-          Quatf n = q[k].normalized();
-          if (k && n.dot(prev) < 0.0f) n.coeffs() = -n.coeffs();  // the same rotation, on the short arc from the last
-          prev = n;
-          flat.insert(flat.end(), {n.x(), n.y(), n.z(), n.w()});
-        }
-        add(node, "rotation", t, flat.data(), 4);
-      }
-      FF_CHECK(clean_keys(ch.scale_times, ch.scales, clip.duration, what + " scale", t, v3));
-      if (!t.empty()) {
-        std::vector<float> flat;
-        for (const Vec3f& v : v3) flat.insert(flat.end(), {v.x(), v.y(), v.z()});
-        add(node, "scale", t, flat.data(), 3);
-      }
-    }
-    if (channels.empty() && nn > 0) {  // keep the clip (its name, its length): the first node at rest
+    ClipWriter w{b};
+    for (const NodeChannel& ch : clip.channels) FF_CHECK(add_channel(w, skin, clip, name, ch));
+    if (w.channels.empty() && nn > 0) {  // keep the clip (its name, its length): the first node at rest
       std::vector<float> t = {0.0f};
       if (clip.duration > 0.0 && static_cast<float>(clip.duration) > 0.0f) t.push_back(static_cast<float>(clip.duration));
       const Quatf r = skin.nodes[0].rotation.normalized();
       std::vector<float> flat;
       for (std::size_t k = 0; k < t.size(); ++k) flat.insert(flat.end(), {r.x(), r.y(), r.z(), r.w()});
-      add(0, "rotation", t, flat.data(), 4);
+      w.add(0, "rotation", t, flat.data(), 4);
     }
-    if (!channels.empty()) animations.push_back({{"name", name}, {"channels", channels}, {"samplers", samplers}});
+    if (!w.channels.empty()) animations.push_back({{"name", name}, {"channels", w.channels}, {"samplers", w.samplers}});
   }
+  return animations;
+}
+
+}  // namespace
+
+Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
+                                                    const std::vector<std::array<std::uint16_t, kMaxInfluences>>& joints,
+                                                    const std::vector<std::array<float, kMaxInfluences>>& weights,
+                                                    const Skin& skin, const MeshTransform& transform, const Vec3f& tint) {
+  FF_CHECK(check_rig_input(mesh, joints, weights, skin, transform));
+  const std::size_t nv = mesh.vertices.size();
+  const FileSpace f = to_file_space(mesh, transform);
+  std::vector<std::array<std::uint16_t, kMaxInfluences>> jo = joints;
+  std::vector<std::array<float, kMaxInfluences>> we = weights;
+  for (std::size_t i = 0; i < nv; ++i) FF_CHECK(clean_influences(jo[i], we[i], skin.joint_nodes.size(), i));
+
+  GlbBuilder b;
+  const json attributes = vertex_attributes(b, f, jo, we);
+  const int indices = index_accessor(b, mesh);
+  const json nodes = rig_nodes(skin, transform, f.rot);
+  const std::size_t mesh_node = nodes.size() - 1;
+  const json skins = rig_skins(b, skin);
+  FF_TRY(const json animations, rig_animations(b, skin));
 
   WaterMaterial water;
   water.tint = tint;
-  json material = glb::water_material(water, world_box, false);
+  json material = glb::water_material(water, f.world_box, false);
   // thicknessFactor is in the mesh's own (file) coordinates, attenuationDistance in the world's.
-  const Vec3f file_ext = file_box.max - file_box.min;
+  const Vec3f file_ext = f.file_box.max - f.file_box.min;
   material["extensions"]["KHR_materials_volume"]["thicknessFactor"] = 0.25f * (file_ext.norm() > 0.0f ? file_ext.norm() : 1.0f);
 
   while (b.bin.size() % 4) b.bin.push_back(0);
