@@ -32,21 +32,27 @@ void push_inside(std::span<Vec3f> x, const SdfGrid& sdf, float depth) {
                      [&](std::int64_t i) { push_one(x[static_cast<std::size_t>(i)], sdf, depth); });
 }
 
-std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_distance,
-                            std::span<const Vec3f> surface, std::size_t* added) {
-  // 1. Separate: pairs a little too close are pushed apart (hard distance constraints to 1.03× the
-  //    minimum, Jacobi with averaging, a few sweeps), staying inside: this settles nearly all of them
-  //    without opening a hole.
+namespace {
+
+// Cell-sorts x (the grid built on it) and finds its neighbour lists within the grid's radius.
+void sort_and_find_neighbors(std::vector<Vec3f>& x, core::NeighborGrid& grid, core::NeighborList& nb,
+                             std::vector<Vec3f>& scratch) {
+  grid.build(x);
+  core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
+  grid.points_were_sorted();
+  grid.neighbors(x, nb);
+}
+
+// Step 1 of enforce_spacing: pairs a little too close are pushed apart (hard distance constraints to 1.03× the
+// minimum, Jacobi with averaging, a few sweeps), staying inside.
+void separate_close_pairs(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_distance, core::NeighborList& nb,
+                          std::vector<Vec3f>& scratch) {
   const float target = 1.03f * min_distance, depth = 0.0f;
   core::NeighborGrid grid(target);
-  core::NeighborList nb;
-  std::vector<Vec3f> scratch, delta(x.size());
+  std::vector<Vec3f> delta(x.size());
   const float m2 = min_distance * min_distance;
   for (int sweep = 0; sweep < 10; ++sweep) {
-    grid.build(x);
-    core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
-    grid.points_were_sorted();
-    grid.neighbors(x, nb);
+    sort_and_find_neighbors(x, grid, nb, scratch);
     // Done when no pair violates the minimum itself (pairs between it and the target are fine).
     const bool violated = core::deterministic_max(static_cast<std::int64_t>(x.size()), 0.0, [&](std::int64_t ii) {
       const auto i = static_cast<std::size_t>(ii);
@@ -75,12 +81,15 @@ std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min
       push_one(x[i], sdf, depth);
     });
   }
-  // 2. Drop: in cell order, a sample is kept unless an earlier kept sample is closer than min_distance.
-  grid = core::NeighborGrid(min_distance);
-  grid.build(x);
-  core::apply_permutation(x, std::span<const Index>(grid.sorted()), scratch);
-  grid.points_were_sorted();
-  grid.neighbors(x, nb);
+}
+
+// Step 2: in cell order, a sample is kept unless an earlier kept sample is closer than min_distance. x is left
+// cell-sorted; returns the kept samples.
+std::vector<Vec3f> drop_close_samples(std::vector<Vec3f>& x, float min_distance, core::NeighborList& nb,
+                                      std::vector<Vec3f>& scratch) {
+  const float m2 = min_distance * min_distance;
+  core::NeighborGrid grid(min_distance);
+  sort_and_find_neighbors(x, grid, nb, scratch);
   std::vector<std::uint8_t> keep(x.size(), 1);
   for (std::size_t i = 0; i < x.size(); ++i)
     for (Index j : nb.of(i))
@@ -92,10 +101,14 @@ std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min
   kept.reserve(x.size());
   for (std::size_t i = 0; i < x.size(); ++i)
     if (keep[i]) kept.push_back(x[i]);
-  const std::size_t dropped = x.size() - kept.size();
+  return kept;
+}
 
-  // 3. Fill: an inside grid node with no sample within min_distance gets one (greedily, in node order,
-  //    each new sample at least min_distance from all others). This is where thin tips get covered.
+// Step 3: an inside grid node with no sample within min_distance gets one (greedily, in node order, each new sample
+// at least min_distance from all others). This is where thin tips get covered. Returns the new samples.
+std::vector<Vec3f> fill_gaps(const std::vector<Vec3f>& kept, const SdfGrid& sdf, float min_distance,
+                             std::span<const Vec3f> surface, core::NeighborList& nb) {
+  const float m2 = min_distance * min_distance;
   std::vector<Vec3f> nodes;
   for (int k = 0; k < sdf.dims.z(); ++k)
     for (int j = 0; j < sdf.dims.y(); ++j)
@@ -108,7 +121,6 @@ std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min
   nodes.insert(nodes.end(), surface.begin(), surface.end());
   core::NeighborGrid kg(min_distance);
   kg.build(kept);
-  std::size_t inserted = 0;
   constexpr std::size_t kChunk = std::size_t(1) << 16;
   std::vector<Vec3f> fresh;
   std::unordered_map<std::uint64_t, std::vector<Index>> added_cells;
@@ -142,12 +154,78 @@ std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min
       }
     }
   }
-  inserted = fresh.size();
+  return fresh;
+}
+
+}  // namespace
+
+std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_distance,
+                            std::span<const Vec3f> surface, std::size_t* added) {
+  // 1. Separate: this settles nearly all close pairs without opening a hole.
+  core::NeighborList nb;
+  std::vector<Vec3f> scratch;
+  separate_close_pairs(x, sdf, min_distance, nb, scratch);
+  // 2. Drop.
+  std::vector<Vec3f> kept = drop_close_samples(x, min_distance, nb, scratch);
+  const std::size_t dropped = x.size() - kept.size();
+  // 3. Fill.
+  const std::vector<Vec3f> fresh = fill_gaps(kept, sdf, min_distance, surface, nb);
+  const std::size_t inserted = fresh.size();
   kept.insert(kept.end(), fresh.begin(), fresh.end());
   x.swap(kept);
   if (added) *added = inserted;
   return dropped;
 }
+
+namespace {
+
+// Samples' depths are re-evaluated for all every kRefresh steps of relax_samples.
+constexpr int kRefresh = 5;
+
+// One step's forces F_i = −∇_i E, E = Σ_pairs (1 − r/r_c)³ / 3 · r_c: a soft repulsion that reaches past the
+// nearest neighbours, so a void is closed by the samples around it, plus the mirror images' near the surface;
+// refreshes the cached depths it evaluates.
+void relax_forces(const std::vector<Vec3f>& x, const core::NeighborList& nb, const SdfGrid& sdf,
+                  const RelaxParams& params, int step, float shell, std::vector<float>& cached,
+                  std::vector<Vec3f>& force) {
+  const auto ni = static_cast<std::int64_t>(x.size());
+  const float d = params.spacing, rc = params.reach * d;
+  const __m128 zero = _mm_setzero_ps(), rc4 = _mm_set1_ps(rc), inv_rc = _mm_set1_ps(1.0f / rc),
+               one = _mm_set1_ps(1.0f), tiny = _mm_set1_ps(1e-7f * d);
+  core::parallel_for(ni, [&](std::int64_t ii) {
+    using namespace core::simd;
+    const auto i = static_cast<Index>(ii);
+    const __m128 px = broadcast(x[i].x()), py = broadcast(x[i].y()), pz = broadcast(x[i].z());
+    __m128 fx = zero, fy = zero, fz = zero;
+    // Four pairs at a time; coincident samples exert no force here (enforce_spacing separates them).
+    core::for_neighbors4(nb.of(i), i, [&](const Index* j, __m128 lanes) {
+      const V3 xj = gather(x.data(), j[0], j[1], j[2], j[3]);
+      const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
+      const __m128 len = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz)));
+      const __m128 use = _mm_and_ps(lanes, _mm_and_ps(_mm_cmplt_ps(len, rc4), _mm_cmpgt_ps(len, tiny)));
+      const __m128 q = _mm_sub_ps(one, _mm_mul_ps(len, inv_rc));
+      const __m128 c = select(use, _mm_div_ps(_mm_mul_ps(q, q), len));
+      fx = _mm_add_ps(fx, _mm_mul_ps(c, rx));
+      fy = _mm_add_ps(fy, _mm_mul_ps(c, ry));
+      fz = _mm_add_ps(fz, _mm_mul_ps(c, rz));
+    });
+    Vec3f f(hsum(fx), hsum(fy), hsum(fz));
+    // The sample's mirror image across the surface repels it too (at half strength): samples keep off
+    // the surface by about half a spacing, so the layers of a thin wall sit near its middle.
+    if (step % kRefresh == 0 || cached[i] < shell) {
+      const SdfGrid::Sample s = sdf.sample(x[i]);
+      cached[i] = -s.distance;
+      const float g = s.gradient.norm(), l = 2.0f * std::max(-s.distance, 0.0f);
+      if (params.mirror > 0.0f && g > 0.0f && l < rc) {
+        const float q = 1.0f - l / rc;
+        f -= (params.mirror * q * q / g) * s.gradient;
+      }
+    }
+    force[i] = f;
+  });
+}
+
+}  // namespace
 
 void relax_samples(std::vector<Vec3f>& x, const SdfGrid& sdf, const RelaxParams& params, core::Progress& progress) {
   const std::size_t n = x.size();
@@ -162,7 +240,6 @@ void relax_samples(std::vector<Vec3f>& x, const SdfGrid& sdf, const RelaxParams&
   // The surface matters only to samples near it. Each sample's depth is cached; every kRefresh steps all
   // are re-evaluated, in between only those that can be within reach of the surface by then (a sample
   // moves at most max_move·d per step).
-  constexpr int kRefresh = 5;
   const float shell = 0.5f * rc + (kRefresh + 1) * params.max_move * d + depth;
   std::vector<float> cached(n, 0.0f), fscratch;
   progress.begin("blue-noise relaxation", static_cast<std::size_t>(params.steps));
@@ -178,41 +255,7 @@ void relax_samples(std::vector<Vec3f>& x, const SdfGrid& sdf, const RelaxParams&
       grid.neighbors(x, nb);
       at_search = x;
     }
-    // F_i = −∇_i E, E = Σ_pairs (1 − r/r_c)³ / 3 · r_c: a soft repulsion that reaches past the nearest
-    // neighbours, so a void is closed by the samples around it.
-    const __m128 zero = _mm_setzero_ps(), rc4 = _mm_set1_ps(rc), inv_rc = _mm_set1_ps(1.0f / rc),
-                 one = _mm_set1_ps(1.0f), tiny = _mm_set1_ps(1e-7f * d);
-    core::parallel_for(ni, [&](std::int64_t ii) {
-      using namespace core::simd;
-      const auto i = static_cast<Index>(ii);
-      const __m128 px = broadcast(x[i].x()), py = broadcast(x[i].y()), pz = broadcast(x[i].z());
-      __m128 fx = zero, fy = zero, fz = zero;
-      // Four pairs at a time; coincident samples exert no force here (enforce_spacing separates them).
-      core::for_neighbors4(nb.of(i), i, [&](const Index* j, __m128 lanes) {
-        const V3 xj = gather(x.data(), j[0], j[1], j[2], j[3]);
-        const __m128 rx = _mm_sub_ps(px, xj.x), ry = _mm_sub_ps(py, xj.y), rz = _mm_sub_ps(pz, xj.z);
-        const __m128 len = _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, rx), _mm_mul_ps(ry, ry)), _mm_mul_ps(rz, rz)));
-        const __m128 use = _mm_and_ps(lanes, _mm_and_ps(_mm_cmplt_ps(len, rc4), _mm_cmpgt_ps(len, tiny)));
-        const __m128 q = _mm_sub_ps(one, _mm_mul_ps(len, inv_rc));
-        const __m128 c = select(use, _mm_div_ps(_mm_mul_ps(q, q), len));
-        fx = _mm_add_ps(fx, _mm_mul_ps(c, rx));
-        fy = _mm_add_ps(fy, _mm_mul_ps(c, ry));
-        fz = _mm_add_ps(fz, _mm_mul_ps(c, rz));
-      });
-      Vec3f f(hsum(fx), hsum(fy), hsum(fz));
-      // The sample's mirror image across the surface repels it too (at half strength): samples keep off
-      // the surface by about half a spacing, so the layers of a thin wall sit near its middle.
-      if (step % kRefresh == 0 || cached[i] < shell) {
-        const SdfGrid::Sample s = sdf.sample(x[i]);
-        cached[i] = -s.distance;
-        const float g = s.gradient.norm(), l = 2.0f * std::max(-s.distance, 0.0f);
-        if (params.mirror > 0.0f && g > 0.0f && l < rc) {
-          const float q = 1.0f - l / rc;
-          f -= (params.mirror * q * q / g) * s.gradient;
-        }
-      }
-      force[i] = f;
-    });
+    relax_forces(x, nb, sdf, params, step, shell, cached, force);
     // Gradient descent with a step that moves the mean sample by `step_size`·d, annealed to a fifth of
     // it over the run, each sample capped at `max_move`·d.
     const double mean = core::deterministic_sum(ni, [&](std::int64_t i) { return double(force[i].norm()); }) / double(n);
