@@ -207,6 +207,11 @@ void PbfSolver::clamp_to_walls(std::vector<Vec3f>& x) const {
 // (a neighbour list is built on x at the start of the sub-step, the passes use x*) or at zero distance
 // are masked off, which matches the scalar definitions: W and ∇W vanish at r ≥ h, ∇W is 0 at r = 0.
 void PbfSolver::solve_iteration_lists(ParticleSet& p) {
+  lambda_pass_lists(p);
+  position_pass_lists(p);
+}
+
+void PbfSolver::lambda_pass_lists(ParticleSet& p) const {
   using namespace core::simd;
   const std::size_t n = p.size();
   const Vec3f* xs = p.predicted.data();
@@ -243,7 +248,14 @@ void PbfSolver::solve_iteration_lists(ParticleSet& p) {
     const Vec3f grad_i(hsum(gx), hsum(gy), hsum(gz));
     lambda[i] = pbf_lambda(density_constraint(rho[i], rho0), hsum(g2) + grad_i.squaredNorm(), eps);
   });
+}
 
+void PbfSolver::position_pass_lists(ParticleSet& p) {
+  using namespace core::simd;
+  const std::size_t n = p.size();
+  const Vec3f* xs = p.predicted.data();
+  const float* lambda = p.lambda.data();
+  const __m128 h = broadcast(spiky_.h), h2 = broadcast(spiky_.h2), zero = _mm_setzero_ps();
   // Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j),  s_corr = −k (W/W(Δq))ⁿ / S_0.
   // The exponent is a compile-time constant in the loop (kN; 0 = no s_corr), so the power unrolls.
   const __m128 w_ratio = broadcast(poly6_.k / w_dq_), scorr_c = broadcast(-params_.scorr_k / s0_);

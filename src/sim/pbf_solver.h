@@ -87,6 +87,10 @@ class PbfSolver {
   void xsph_accelerations(ParticleSet& p, float dt, const DragModel* drag) const;
   void solve_iteration(ParticleSet& p);
   void solve_iteration_lists(ParticleSet& p);
+  // solve_iteration_lists, pass 1: density at x* and λ_i of every particle (four neighbours at a time).
+  void lambda_pass_lists(ParticleSet& p) const;
+  // solve_iteration_lists, pass 2: the Jacobi position corrections (with s_corr) into x*.
+  void position_pass_lists(ParticleSet& p);
   void clamp_to_walls(std::vector<Vec3f>& x) const;
   void vorticity_confinement(ParticleSet& p, float dt);
 
