@@ -131,40 +131,16 @@ std::size_t TargetShape::bytes() const {
          (tree ? sizeof(LazyTree) - sizeof(core::PointTree) + tree_->tree.bytes() : 0);
 }
 
-FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,
-                     std::span<const std::uint8_t> target_ids, std::span<const std::uint8_t> controlled,
-                     float particle_radius, const Eigen::Affine3f& rest_from_world, float world_scale) {
-  assert(target_ids.size() == positions.size() && controlled.size() == positions.size());
-  assert(world_scale > 0.0f && std::isfinite(world_scale));
-  const std::size_t total = std::min({positions.size(), target_ids.size(), controlled.size()});
+namespace {
 
-  // The target's fluid in the rest frame, in input order (a serial pass: a copy, ~1 ns per particle).
-  std::vector<Vec3f> x;
-  std::vector<std::uint8_t> ctrl;
-  for (std::size_t i = 0; i < total; ++i)
-    if (target_ids[i] == target_id && positions[i].allFinite()) {
-      x.push_back(rest_from_world * positions[i]);
-      ctrl.push_back(controlled[i] != 0 ? 1 : 0);
-    }
-
-  FrameMetrics m;
-  m.fluid = x.size();
-  m.controlled = static_cast<std::size_t>(std::count(ctrl.begin(), ctrl.end(), std::uint8_t{1}));
-  if (m.fluid == 0) {
-    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-    m.e_fwd = m.e_bwd = m.error_rate = m.e_fwd_all = m.error_spacings = nan;
-    return m;
-  }
-  const auto n = static_cast<std::int64_t>(m.fluid);
-  const double s = world_scale;
-  const double r = particle_radius;
-
-  // Forward: each fluid particle's distance to the nearest sample, and whether it is inside (signed distance ≤ r)
-  // or splashed (> 2r). A posed shape answers those directly (classify: its exact field is costly to ask for the
-  // distance); a built one by its grid's signed distance, in world metres.
-  std::vector<float> to_sample(m.fluid);
-  std::vector<std::uint8_t> in(m.fluid), out(m.fluid);
-  for_each_chunk(n, [&](std::int64_t begin, std::int64_t end) {
+// Forward: each fluid particle's distance to the nearest sample, and whether it is inside (signed distance ≤ r)
+// or splashed (> 2r). A posed shape answers those directly (classify: its exact field is costly to ask for the
+// distance); a built one by its grid's signed distance, in world metres (s: world metres per rest metre).
+void forward_distances(const TargetShape& shape, const std::vector<Vec3f>& x, double r, double s,
+                       std::vector<float>& to_sample, std::vector<std::uint8_t>& in, std::vector<std::uint8_t>& out) {
+  to_sample.resize(x.size());
+  in.resize(x.size()), out.resize(x.size());
+  for_each_chunk(static_cast<std::int64_t>(x.size()), [&](std::int64_t begin, std::int64_t end) {
     for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
       to_sample[i] = shape.nearest_sample_distance(x[i]);
       if (shape.posed()) {
@@ -176,9 +152,11 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
       }
     }
   });
+}
 
-  // Backward: each sample's distance to the nearest fluid particle, in the samples' cell order. A grid of one
-  // fluid spacing over the samples' box (+2 cells) answers where the fluid is near; the rest go to a tree.
+// Backward: each sample's distance to the nearest fluid particle, in the samples' cell order. A grid of one
+// fluid spacing over the samples' box (+2 cells) answers where the fluid is near; the rest go to a tree.
+std::vector<float> backward_distances(const TargetShape& shape, const std::vector<Vec3f>& x, double r, double s) {
   const core::PointGrid& samples = shape.control_grid();
   const auto m_samples = static_cast<std::int64_t>(samples.points().size());
   const float fluid_cell = r > 0.0 && std::isfinite(r) ? float(2.0 * r / s) : shape.control_spacing();
@@ -209,6 +187,44 @@ FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span
   core::parallel_for(m_samples, [&](std::int64_t j) {
     to_fluid[static_cast<std::size_t>(j)] = std::sqrt(to_fluid[static_cast<std::size_t>(j)]);
   });
+  return to_fluid;
+}
+
+}  // namespace
+
+FrameMetrics measure(const TargetShape& shape, std::uint8_t target_id, std::span<const Vec3f> positions,
+                     std::span<const std::uint8_t> target_ids, std::span<const std::uint8_t> controlled,
+                     float particle_radius, const Eigen::Affine3f& rest_from_world, float world_scale) {
+  assert(target_ids.size() == positions.size() && controlled.size() == positions.size());
+  assert(world_scale > 0.0f && std::isfinite(world_scale));
+  const std::size_t total = std::min({positions.size(), target_ids.size(), controlled.size()});
+
+  // The target's fluid in the rest frame, in input order (a serial pass: a copy, ~1 ns per particle).
+  std::vector<Vec3f> x;
+  std::vector<std::uint8_t> ctrl;
+  for (std::size_t i = 0; i < total; ++i)
+    if (target_ids[i] == target_id && positions[i].allFinite()) {
+      x.push_back(rest_from_world * positions[i]);
+      ctrl.push_back(controlled[i] != 0 ? 1 : 0);
+    }
+
+  FrameMetrics m;
+  m.fluid = x.size();
+  m.controlled = static_cast<std::size_t>(std::count(ctrl.begin(), ctrl.end(), std::uint8_t{1}));
+  if (m.fluid == 0) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    m.e_fwd = m.e_bwd = m.error_rate = m.e_fwd_all = m.error_spacings = nan;
+    return m;
+  }
+  const auto n = static_cast<std::int64_t>(m.fluid);
+  const double s = world_scale;
+  const double r = particle_radius;
+
+  std::vector<float> to_sample;
+  std::vector<std::uint8_t> in, out;
+  forward_distances(shape, x, r, s, to_sample, in, out);
+  const std::vector<float> to_fluid = backward_distances(shape, x, r, s);
+  const auto m_samples = static_cast<std::int64_t>(to_fluid.size());
 
   auto at = [](const std::vector<float>& v, std::int64_t i) { return double(v[static_cast<std::size_t>(i)]); };
   auto is_ctrl = [&](std::int64_t i) { return ctrl[static_cast<std::size_t>(i)] != 0; };
