@@ -157,19 +157,12 @@ Vec3f keep_inside(const MeshAnchors& a, std::size_t i, const Vec3f& x, const std
   return in;
 }
 
-Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bind,
-                                  std::span<const std::vector<Vec3f>> poses, float spacing) {
-  if (!a.caged()) return param_error("only a cage's samples can be guarded");
-  const std::size_t nv = a.mesh.vertices.size(), nt = a.mesh.triangles.size(), ns = a.cage.size() / nv;
-  for (const auto& p : poses)
-    if (p.size() != nv) return param_error("a pose for a cage's guard does not match its vertices");
-  if (!(spacing > 0.0f) || !std::isfinite(spacing)) return param_error("a cage's guard needs a positive spacing");
-  // From here until the guard is built, place() is the cage alone.
-  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();
+namespace {
 
-  // Orientation: the field keeps each triangle outward (flipping a file's inconsistent patches). One it dropped (zero
-  // area at bind) gets 0: no normal, and no share of the winding number, should a pose open it up.
-  a.orientation.assign(nt, 0);
+// The field keeps each triangle outward (flipping a file's inconsistent patches). One it dropped (zero area at bind)
+// gets 0: no normal, and no share of the winding number, should a pose open it up.
+void orient_triangles(MeshAnchors& a, const sampling::MeshField& bind) {
+  a.orientation.assign(a.mesh.triangles.size(), 0);
   for (Index k = 0; k < bind.triangle_count(); ++k) {
     const Index t = bind.source_triangle(k);
     const auto& f = bind.triangles()[k];
@@ -178,7 +171,11 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
     const Vec3f raw = (a.mesh.vertices[tri[1]] - v0).cross(a.mesh.vertices[tri[2]] - v0);
     a.orientation[t] = raw.dot((f.b - f.a).cross(f.c - f.a)) < 0.0f ? std::int8_t{-1} : std::int8_t{1};
   }
-  // Edge neighbours (an edge shared by exactly two triangles) and each vertex's triangles.
+}
+
+// Edge neighbours (an edge shared by exactly two triangles) and each vertex's triangles.
+void build_adjacency(MeshAnchors& a) {
+  const std::size_t nv = a.mesh.vertices.size(), nt = a.mesh.triangles.size();
   std::unordered_map<std::uint64_t, std::vector<std::pair<Index, int>>> edges;
   for (Index t = 0; t < nt; ++t)
     for (int e = 0; e < 3; ++e) {
@@ -201,18 +198,18 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
     for (Index t = 0; t < nt; ++t)
       for (const Index v : a.mesh.triangles[t]) a.corner_triangle[fill[v]++] = t;
   }
+}
 
-  // Each sample's closest triangle at every pose; a sample is guarded if it comes within the band of the surface (or
-  // out of the mesh) at one pose or more. Its guard keeps the triangles closest to it at all of them, not only where
-  // it came near: where two limbs come close, a sample deep in one can pass near the other's surface, and judged by
-  // that surface alone at another pose it would seem far outside and be pulled over to it.
-  const float band = kGuardBand * spacing;
-  std::vector<std::vector<Index>> near(ns);
-  std::vector<std::uint8_t> guard(ns, 0);
+// Each sample's closest triangle at every pose (the bind pose first) into near[i]; guard[i] = 1 where the sample
+// comes within `band` of the surface (or out of the mesh) at one pose or more.
+Status find_near_triangles(const MeshAnchors& a, const sampling::MeshField& bind,
+                           std::span<const std::vector<Vec3f>> poses, float band, std::vector<std::vector<Index>>& near,
+                           std::vector<std::uint8_t>& guard) {
+  const auto ns = static_cast<std::int64_t>(near.size());
   for (std::size_t k = 0; k <= poses.size(); ++k) {  // the bind pose, then the poses
     const std::vector<Vec3f>& p = k == 0 ? a.mesh.vertices : poses[k - 1];
     FF_TRY(sampling::MeshField field, bind.moved(p));
-    core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
+    core::parallel_for(ns, [&](std::int64_t ii) {
       const auto i = static_cast<std::size_t>(ii);
       const Vec3f x = a.place(i, p);
       const auto c = field.closest(x);
@@ -221,9 +218,14 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
       if (!guard[i] && (c.distance < band || !field.inside(x))) guard[i] = 1;
     });
   }
-  for (std::size_t i = 0; i < ns; ++i)
-    if (!guard[i]) std::vector<Index>().swap(near[i]);
-  // A guarded sample's guard depth: its depth at bind, within [kMinGuardDepth, kGuardBand] spacings.
+  return {};
+}
+
+// The guards: each guarded sample's depth at bind (within [kMinGuardDepth, kGuardBand] spacings) and its triangles,
+// those near it at any pose and their edge neighbours.
+void build_guards(MeshAnchors& a, const sampling::MeshField& bind, std::vector<std::vector<Index>>& near,
+                  float spacing, float band, CageGuardStats& stats) {
+  const std::size_t ns = near.size();
   std::vector<float> depth(ns, 0.0f);
   core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
     const auto i = static_cast<std::size_t>(ii);
@@ -232,7 +234,6 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   });
   a.guard_begin.assign(ns + 1, 0);
   a.guard_depth = std::move(depth);
-  CageGuardStats stats;
   for (std::size_t i = 0; i < ns; ++i) {
     auto& ts = near[i];
     if (!ts.empty()) {
@@ -247,10 +248,15 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
     a.guard_triangle.insert(a.guard_triangle.end(), ts.begin(), ts.end());
     a.guard_begin[i + 1] = static_cast<std::uint32_t>(a.guard_triangle.size());
   }
-  // Samples in a fold's pocket: where the pose folds the mesh over itself, the pocket between the folds is outside by
-  // the winding number though inside by its nearest triangle, and easing along that triangle cannot leave it. A
-  // sample that ends outside at one of the poses is given a partner: the nearest sample at least kFoldPartnerDepth
-  // spacings deep at bind that is inside at every pose; posed and outside, it is moved towards its partner.
+}
+
+// Samples in a fold's pocket: where the pose folds the mesh over itself, the pocket between the folds is outside by
+// the winding number though inside by its nearest triangle, and easing along that triangle cannot leave it. A
+// sample that ends outside at one of the poses is given a partner: the nearest sample at least kFoldPartnerDepth
+// spacings deep at bind that is inside at every pose; posed and outside, it is moved towards its partner.
+Status find_fold_partners(MeshAnchors& a, const sampling::MeshField& bind, std::span<const std::vector<Vec3f>> poses,
+                          const std::vector<std::uint8_t>& guard, float spacing, CageGuardStats& stats) {
+  const std::size_t ns = guard.size();
   std::vector<Vec3f> at_bind(ns);  // guarded: placed as posing will place them
   std::vector<std::uint8_t> out(ns, 0), deep(ns, 0);
   core::parallel_for(static_cast<std::int64_t>(ns), [&](std::int64_t ii) {
@@ -281,6 +287,37 @@ Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bin
   stats.folded = static_cast<std::size_t>(
       std::count_if(partner.begin(), partner.end(), [](Index j) { return j != kInvalidIndex; }));
   if (stats.folded > 0) a.fold_partner = std::move(partner);
+  return {};
+}
+
+}  // namespace
+
+Result<CageGuardStats> guard_cage(MeshAnchors& a, const sampling::MeshField& bind,
+                                  std::span<const std::vector<Vec3f>> poses, float spacing) {
+  if (!a.caged()) return param_error("only a cage's samples can be guarded");
+  const std::size_t nv = a.mesh.vertices.size(), ns = a.cage.size() / nv;
+  for (const auto& p : poses)
+    if (p.size() != nv) return param_error("a pose for a cage's guard does not match its vertices");
+  if (!(spacing > 0.0f) || !std::isfinite(spacing)) return param_error("a cage's guard needs a positive spacing");
+  // From here until the guard is built, place() is the cage alone.
+  a.guard_begin.clear(), a.guard_triangle.clear(), a.guard_depth.clear(), a.fold_partner.clear();
+
+  orient_triangles(a, bind);
+  build_adjacency(a);
+
+  // Each sample's closest triangle at every pose; a sample is guarded if it comes within the band of the surface (or
+  // out of the mesh) at one pose or more. Its guard keeps the triangles closest to it at all of them, not only where
+  // it came near: where two limbs come close, a sample deep in one can pass near the other's surface, and judged by
+  // that surface alone at another pose it would seem far outside and be pulled over to it.
+  const float band = kGuardBand * spacing;
+  std::vector<std::vector<Index>> near(ns);
+  std::vector<std::uint8_t> guard(ns, 0);
+  FF_CHECK(find_near_triangles(a, bind, poses, band, near, guard));
+  for (std::size_t i = 0; i < ns; ++i)
+    if (!guard[i]) std::vector<Index>().swap(near[i]);
+  CageGuardStats stats;
+  build_guards(a, bind, near, spacing, band, stats);
+  FF_CHECK(find_fold_partners(a, bind, poses, guard, spacing, stats));
   return stats;
 }
 

@@ -92,8 +92,11 @@ std::vector<io::Mat4f> world_joint_matrices(const io::Skin& skin, const io::Mesh
   return k;
 }
 
-Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::TriangleMesh& target_bind,
-                                     const io::Skin& skin, const io::MeshTransform& transform, int clip, double t) {
+namespace {
+
+// The inputs transfer_skin takes: a formed mesh, a target with triangles and a weight per vertex, a finite time.
+Status check_transfer_input(const io::TriangleMesh& formed, const io::TriangleMesh& target_bind, const io::Skin& skin,
+                            double t) {
   const std::size_t nt = target_bind.vertices.size();
   if (formed.vertices.empty()) return input_error("skin transfer: the formed mesh is empty");
   if (target_bind.triangles.empty()) return input_error("skin transfer: the target mesh has no triangles");
@@ -103,12 +106,45 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
   if (!std::isfinite(t)) return input_error("skin transfer: the time is not finite");
   for (const auto& v : formed.vertices)
     if (!v.allFinite()) return input_error("skin transfer: the formed mesh has a non-finite vertex");
-  const std::vector<io::Mat4f> kw = world_joint_matrices(skin, transform, clip, t);
-  for (std::size_t v = 0; v < nt; ++v)
+  return {};
+}
+
+// Every weighted influence of the target names one of the `joints` joints.
+Status check_joint_refs(const io::Skin& skin, std::size_t joints) {
+  for (std::size_t v = 0; v < skin.joints.size(); ++v)
     for (int s = 0; s < io::kMaxInfluences; ++s)
-      if (skin.weights[v][s] != 0.0f && skin.joints[v][s] >= kw.size())
+      if (skin.weights[v][s] != 0.0f && skin.joints[v][s] >= joints)
         return input_error(fmt::format("skin transfer: target vertex {} refers to joint {} of {}", v, skin.joints[v][s],
-                                       kw.size()));
+                                       joints));
+  return {};
+}
+
+// The joint matrices in double, with their linear parts' |determinant| and inverse.
+struct JointTerms {
+  std::vector<Mat4d> kd;
+  std::vector<double> kdet;
+  std::vector<Mat3d> kinv;
+};
+
+JointTerms joint_terms(const std::vector<io::Mat4f>& kw) {
+  JointTerms j;
+  j.kd.resize(kw.size()), j.kdet.resize(kw.size()), j.kinv.resize(kw.size());
+  for (std::size_t k = 0; k < kw.size(); ++k) {
+    j.kd[k] = kw[k].cast<double>();
+    j.kdet[k] = std::abs(j.kd[k].topLeftCorner<3, 3>().determinant());
+    j.kinv[k] = j.kd[k].topLeftCorner<3, 3>().inverse();
+  }
+  return j;
+}
+
+}  // namespace
+
+Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::TriangleMesh& target_bind,
+                                     const io::Skin& skin, const io::MeshTransform& transform, int clip, double t) {
+  const std::size_t nt = target_bind.vertices.size();
+  FF_CHECK(check_transfer_input(formed, target_bind, skin, t));
+  const std::vector<io::Mat4f> kw = world_joint_matrices(skin, transform, clip, t);
+  FF_CHECK(check_joint_refs(skin, kw.size()));
 
   // The target posed at (clip, t), and its closest-point index.
   io::TriangleMesh posed;
@@ -120,14 +156,7 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
   });
   auto field = sampling::MeshField::build(posed);
   if (!field) return input_error("skin transfer: the posed target: " + field.error().message);
-  std::vector<Mat4d> kd(kw.size());
-  std::vector<double> kdet(kw.size());
-  std::vector<Mat3d> kinv(kw.size());
-  for (std::size_t j = 0; j < kw.size(); ++j) {
-    kd[j] = kw[j].cast<double>();
-    kdet[j] = std::abs(kd[j].topLeftCorner<3, 3>().determinant());
-    kinv[j] = kd[j].topLeftCorner<3, 3>().inverse();
-  }
+  const JointTerms jt = joint_terms(kw);
 
   const std::size_t nf = formed.vertices.size();
   SkinnedSurface out;
@@ -161,8 +190,8 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
       double ref = 0.0;
       for (int s = 0; s < io::kMaxInfluences; ++s)
         if (inf.weights[s] != 0.0f) {
-          m += double(inf.weights[s]) * kd[inf.joints[s]];
-          ref += double(inf.weights[s]) * kdet[inf.joints[s]];
+          m += double(inf.weights[s]) * jt.kd[inf.joints[s]];
+          ref += double(inf.weights[s]) * jt.kdet[inf.joints[s]];
         }
       const Mat3d a = m.topLeftCorner<3, 3>();
       const Vec3d pd = p.cast<double>();
@@ -173,7 +202,7 @@ Result<SkinnedSurface> transfer_skin(const io::TriangleMesh& formed, const io::T
         const Vec3d q_bind = l[0] * target_bind.vertices[tri[0]].cast<double>() +
                              l[1] * target_bind.vertices[tri[1]].cast<double>() +
                              l[2] * target_bind.vertices[tri[2]].cast<double>();
-        x = q_bind + kinv[d] * (pd - c.point.cast<double>());
+        x = q_bind + jt.kinv[d] * (pd - c.point.cast<double>());
         if (!x.allFinite()) x = q_bind;  // the dominant joint itself is degenerate (a zero scale)
         fell_back[v] = 1;
       }
