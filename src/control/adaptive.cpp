@@ -93,22 +93,12 @@ void AdaptiveController::for_each_bond(std::size_t i, F&& f) const {
 
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
-  // Every part of the control scales with its target's strength (1: as written; 0: the target is inactive, below).
-  strength_.resize(samples_.targets());
-  softened_ = false;
-  target_moving_.resize(samples_.targets());
-  for (std::size_t t = 0; t < strength_.size(); ++t) {
-    strength_[t] = samples_.strength(static_cast<std::uint8_t>(t), time_);
-    softened_ = softened_ || (strength_[t] > 0.0f && strength_[t] < 1.0f);
-    target_moving_[t] = samples_.moving(static_cast<std::uint8_t>(t)) ? 1 : 0;
-  }
+  update_strengths();
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
   // u_c over this sub-step (forward difference): moving targets carry their fluid along (AdaptiveParams::follow).
   if (samples_.update(view.time, view.dt)) fill_.assign(samples_.size(), 0.0f);
   const std::size_t n = p.size(), m = samples_.position.size();
-  const Vec3f* x = p.position.data();
-  const std::uint8_t* tf = p.target.data();
   // Control–fluid pairs within H_c, one query per sub-step on the positions at its start (samples → fluid); the
   // fluid → sample bonds are its transpose, built below.
   fluid_grid_.build(p.position);
@@ -120,6 +110,36 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   sample_xw_[m] = {kSentinelCoord, kSentinelCoord, kSentinelCoord, 0.0f};
   lambda_.assign(m, 0.0f);
 
+  fill_samples(p);
+  build_bonds(p);
+  // The bonds, fills and nearest samples are decided at the start of the sub-step (fluid at x, samples at their
+  // pose then); the corrections act on x*, where the fluid is at its end, so they see the samples where they are at
+  // its end too: x_c + Δt u_c, the pose at t + Δt. Otherwise a moving target's samples trail the fluid they carry by
+  // u_c Δt, and its density constraint pulls that fluid back.
+  if (samples_.moving())
+    parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
+      const auto i = static_cast<std::size_t>(ii);
+      const Vec3f end = samples_.position[i] + view.dt * samples_.velocity[i];
+      sample_xw_[i].x = end.x(), sample_xw_[i].y = end.y(), sample_xw_[i].z = end.z();
+    });
+}
+
+void AdaptiveController::update_strengths() {
+  // Every part of the control scales with its target's strength (1: as written; 0: the target is inactive, below).
+  strength_.resize(samples_.targets());
+  softened_ = false;
+  target_moving_.resize(samples_.targets());
+  for (std::size_t t = 0; t < strength_.size(); ++t) {
+    strength_[t] = samples_.strength(static_cast<std::uint8_t>(t), time_);
+    softened_ = softened_ || (strength_[t] > 0.0f && strength_[t] < 1.0f);
+    target_moving_[t] = samples_.moving(static_cast<std::uint8_t>(t)) ? 1 : 0;
+  }
+}
+
+void AdaptiveController::fill_samples(const sim::ParticleSet& p) {
+  const std::size_t n = p.size(), m = samples_.position.size();
+  const Vec3f* x = p.position.data();
+  const std::uint8_t* tf = p.target.data();
   // ρ_p,i (eq. 8) at x, the fill ratio and the bond radius H_c*,i (eq. 19).
   using namespace core::simd;
   const float mp = ctx_.particle_mass, hc2 = hc_ * hc_;
@@ -189,17 +209,6 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
       for_each_bond(i, [&](Index j) { ++count[j]; });
     }
   }
-  build_bonds(p);
-  // The bonds, fills and nearest samples are decided at the start of the sub-step (fluid at x, samples at their
-  // pose then); the corrections act on x*, where the fluid is at its end, so they see the samples where they are at
-  // its end too: x_c + Δt u_c, the pose at t + Δt. Otherwise a moving target's samples trail the fluid they carry by
-  // u_c Δt, and its density constraint pulls that fluid back.
-  if (samples_.moving())
-    parallel_for(static_cast<std::int64_t>(m), [&](std::int64_t ii) {
-      const auto i = static_cast<std::size_t>(ii);
-      const Vec3f end = samples_.position[i] + view.dt * samples_.velocity[i];
-      sample_xw_[i].x = end.x(), sample_xw_[i].y = end.y(), sample_xw_[i].z = end.z();
-    });
 }
 
 // Bonds B(j), CSR over the fluid, as the transpose of the sample → fluid pairs with |x_ci − x_j| ≤ H_c*,i: a

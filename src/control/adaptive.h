@@ -66,6 +66,11 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   void scatter_correction(sim::ParticleSet& p, const CorrectionLimit& limit);
   void gather_correction(sim::ParticleSet& p, const CorrectionLimit& limit);
   void gather(sim::ParticleSet& p);
+  // begin_step, step 1: each target's strength at this sub-step, whether any is softened, whether each moves.
+  void update_strengths();
+  // begin_step, step 2: each sample's density ρ_p,i at x, fill ratio and bond radius H_c*,i (eq. 8, 19) and its
+  // bond masks, in T sample ranges whose bonds per fluid particle are counted into cursor_ (for build_bonds).
+  void fill_samples(const sim::ParticleSet& p);
   void build_bonds(sim::ParticleSet& p);
   // Calls f(j) for each fluid particle j bonded to sample i (its pairs in cf_, one bit each in bond_mask_).
   template <class F>
