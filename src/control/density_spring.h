@@ -14,6 +14,7 @@
 // Controlled: within H_c of a control particle of its target, or a live spring.
 #include "control/baseline_core.h"
 #include "control/steering.h"
+#include "core/fields.h"
 #include "sim/controller.h"
 
 #include <cmath>
@@ -21,6 +22,37 @@
 #include <string>
 
 namespace ff::control {
+
+/// The adaptive spring's parameters (step 2 above: its step, its logistic switch, the reach of its bond to a reference
+/// control particle and the bond's lifetime), which `pbfc` and `weighted` both take: their parameter structs derive
+/// from it and list its fields among their own, under the same keys (controller.pbfc.spring,
+/// controller.weighted.spring, ...).
+struct SpringBondParams {
+  float spring = 0.5f;        ///< β, spring step in spacings d per sub-step. [0, 5]
+  float spring_start = 1.5f;  ///< b, where the logistic switch is half on, in H_c. [0, 10]
+  float steepness = 10.0f;    ///< a · H_c, the switch's steepness. [0.1, 1000]
+  float bond_reach = 1.0f;    ///< D in H_c: the reference is refreshed while within D/2. [0.1, 4]
+  float lifetime = 3.0f;      ///< T, sub-steps a spring survives after its particle left D/2. [0, 1000]
+
+  /// The fields' meanings in the key table: pbfc's, and weighted's (which point to pbfc's).
+  struct Docs {
+    std::string_view spring, spring_start, steepness, bond_reach, lifetime;
+  };
+  static constexpr Docs kPbfcDocs{"β, spring step in spacings d per sub-step",
+                                  "b, where the logistic switch is half on, in H_c", "a · H_c, the switch's steepness",
+                                  "D in H_c: the reference is refreshed while within D/2",
+                                  "T, sub-steps a spring survives after its particle left D/2"};
+  static constexpr Docs kAsPbfcDocs{"as pbfc", "as pbfc, in H_c", "as pbfc", "as pbfc, in H_c", "as pbfc, sub-steps"};
+
+  template <class S, class F>
+  static void fields(S& s, F&& f, const Docs& docs = kPbfcDocs) {
+    f("spring", s.spring, core::closed(0.0, 5.0, docs.spring));
+    f("spring_start", s.spring_start, core::closed(0.0, 10.0, docs.spring_start));
+    f("steepness", s.steepness, core::closed(0.1, 1000.0, docs.steepness));
+    f("bond_reach", s.bond_reach, core::closed(0.1, 4.0, docs.bond_reach));
+    f("lifetime", s.lifetime, core::closed(0.0, 1000.0, docs.lifetime));
+  }
+};
 
 struct DensitySpringConfig {
   std::string name;
@@ -37,14 +69,16 @@ struct DensitySpringConfig {
   float kappa = 0.0f;         ///< colour-field weight w_i = 1 + κ (1 − cf_i/max cf); 0 → w_i = 1
 };
 
-/// The fields pbfc's and weighted's parameter structs share, copied into a config that each then completes.
+/// The fields pbfc's and weighted's parameter structs share (α, ε_c and their SpringBondParams), copied into a config
+/// that each then completes.
 template <class P>
 DensitySpringConfig density_spring_config(const P& params, std::string name) {
+  const SpringBondParams& sb = params;
   DensitySpringConfig cfg;
   cfg.name = std::move(name);
   cfg.alpha = params.alpha, cfg.epsilon = params.epsilon;
-  cfg.spring = params.spring, cfg.spring_start = params.spring_start, cfg.steepness = params.steepness;
-  cfg.bond_reach = params.bond_reach, cfg.lifetime = static_cast<int>(std::lround(params.lifetime));
+  cfg.spring = sb.spring, cfg.spring_start = sb.spring_start, cfg.steepness = sb.steepness;
+  cfg.bond_reach = sb.bond_reach, cfg.lifetime = static_cast<int>(std::lround(sb.lifetime));
   return cfg;
 }
 

@@ -7,18 +7,13 @@
 
 namespace ff::control {
 
-struct PbfcParams {
+struct PbfcParams : SpringBondParams {  // spring, spring_start, steepness, bond_reach, lifetime: the adaptive spring
   static constexpr ControllerInfo info{"pbfc", "Zhang et al. 2015 (PBFC): bilateral density constraint, adaptive spring, velocity constraint", false};
   float alpha = 1.0f;            ///< α, density-constraint strength. [0, 10]
   /// ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny (~3k samples, 150 frames, the harness's CFL
   /// sub-steps): ε = 1, 10, 100 gave E 1.13, 1.05, 1.50 %; at 1 an empty target pulls the first fluid in at
   /// ~15 m/s and the CFL rule takes up to 64 sub-steps a frame.
   float epsilon = 10.0f;
-  float spring = 0.5f;           ///< β, spring step in spacings d per sub-step. [0, 5]
-  float spring_start = 1.5f;     ///< b, where the logistic switch is half on, in H_c. [0, 10]
-  float steepness = 10.0f;       ///< a · H_c, the switch's steepness. [0.1, 1000]
-  float bond_reach = 1.0f;       ///< D in H_c: the reference is refreshed while within D/2. [0.1, 4]
-  float lifetime = 3.0f;         ///< T, sub-steps a spring survives after its particle left D/2. [0, 1000]
   float velocity = 0.2f;         ///< γ of the velocity constraint. [0, 1]
   float velocity_moving = 1.0f;  ///< γ while the target moves. [0, 1]
 
@@ -26,11 +21,7 @@ struct PbfcParams {
   static void fields(S& s, F&& f) {
     f("alpha", s.alpha, core::closed(0.0, 10.0, "α, density-constraint strength"));
     f("epsilon", s.epsilon, core::closed(0.01, 100.0, "ε_c as a multiple of S_0"));
-    f("spring", s.spring, core::closed(0.0, 5.0, "β, spring step in spacings d per sub-step"));
-    f("spring_start", s.spring_start, core::closed(0.0, 10.0, "b, where the logistic switch is half on, in H_c"));
-    f("steepness", s.steepness, core::closed(0.1, 1000.0, "a · H_c, the switch's steepness"));
-    f("bond_reach", s.bond_reach, core::closed(0.1, 4.0, "D in H_c: the reference is refreshed while within D/2"));
-    f("lifetime", s.lifetime, core::closed(0.0, 1000.0, "T, sub-steps a spring survives after its particle left D/2"));
+    SpringBondParams::fields(s, f, SpringBondParams::kPbfcDocs);
     f("velocity", s.velocity, core::closed(0.0, 1.0, "γ of the velocity constraint"));
     f("velocity_moving", s.velocity_moving, core::closed(0.0, 1.0, "γ while the target moves"));
   }

@@ -8,29 +8,20 @@
 
 namespace ff::control {
 
-struct WeightedParams {
+struct WeightedParams : SpringBondParams {  // spring, spring_start, steepness, bond_reach, lifetime: as pbfc
   static constexpr ControllerInfo info{"weighted", "Zhou et al. (ref. [60]): colour-field weights, bilateral density to rho_c, adaptive spring", true};
   float alpha = 1.0f;         ///< density-constraint strength. [0, 10]
   /// ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny as pbfc's: ε = 1, 10, 100 gave E 0.72, 1.04,
   /// 4.81 %.
   float epsilon = 1.0f;
   float kappa = 1.0f;         ///< κ of the colour-field weight w_i = 1 + κ (1 − cf_i/max cf). [0, 10]
-  float spring = 0.5f;        ///< as pbfc. [0, 5]
-  float spring_start = 1.5f;  ///< as pbfc, in H_c. [0, 10]
-  float steepness = 10.0f;    ///< as pbfc. [0.1, 1000]
-  float bond_reach = 1.0f;    ///< as pbfc, in H_c. [0.1, 4]
-  float lifetime = 3.0f;      ///< as pbfc, sub-steps. [0, 1000]
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
     f("alpha", s.alpha, core::closed(0.0, 10.0, "density-constraint strength"));
     f("epsilon", s.epsilon, core::closed(0.01, 100.0, "ε_c as a multiple of S_0. [0.01, 100] Chosen once on the bunny as pbfc's: ε = 1, 10, 100 gave E 0.72, 1.04,"));
     f("kappa", s.kappa, core::closed(0.0, 10.0, "κ of the colour-field weight w_i = 1 + κ (1 − cf_i/max cf)"));
-    f("spring", s.spring, core::closed(0.0, 5.0, "as pbfc"));
-    f("spring_start", s.spring_start, core::closed(0.0, 10.0, "as pbfc, in H_c"));
-    f("steepness", s.steepness, core::closed(0.1, 1000.0, "as pbfc"));
-    f("bond_reach", s.bond_reach, core::closed(0.1, 4.0, "as pbfc, in H_c"));
-    f("lifetime", s.lifetime, core::closed(0.0, 1000.0, "as pbfc, sub-steps"));
+    SpringBondParams::fields(s, f, SpringBondParams::kAsPbfcDocs);
   }
   Status validate(std::string_view path = "controller.weighted") const { return core::validate_fields(*this, path); }
 };
