@@ -112,18 +112,147 @@ double posed_volume_share(const pose::TargetSkin& skin, const io::TriangleMesh& 
   return std::isfinite(share) ? std::max(share, 0.0) : 1.0;
 }
 
+namespace {
+
+// The refusal of a spacing dc that would make about `count` control samples of target k, over the limit.
+Error too_many_samples(const scene::Scene& s, std::size_t k, float dc, double count) {
+  return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
+                                 "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
+                                 "sampling.spacing",
+                                 k, dc, count, s.sampling.max_samples));
+}
+
+// The particle radius from the targets' volume (or area): d³ per sample (the blue-noise count is V/d³); an open
+// sheet is sampled by its area instead.
+Status size_particles(scene::Scene& s, double volume, double area) {
+  const double n = static_cast<double>(s.sampling.auto_count);
+  const double d = volume > 0.0 ? std::cbrt(volume / n) : std::sqrt(area / n);
+  if (!(d > 0.0) || !std::isfinite(d)) return input_error("the targets have no volume and no area to size the particles by");
+  s.solver.particle_radius = static_cast<float>(0.5 * d);
+  FF_CHECK(s.solver.validate());
+  return {};
+}
+
+// Target k's fluid volume: the voxel count of its solid at the control spacing dc, less what the sparse-sampling
+// options remove, and for a skinned target, what its tightest pose keeps; an open sheet's is one layer of samples.
+// Sets t.volume and adds it to `volume` (a target with neither volume nor area is left as it was, and adds nothing).
+Status size_target_fluid(const scene::Scene& s, std::size_t k, TargetGeometry& t, float dc, double& volume) {
+  if (!(t.volume > 0.0)) {
+    // An open sheet (glTF2/simple_skin, a cloth, a terrain patch) is sampled as one layer of surface samples:
+    // its fluid is one particle per sample, a layer one spacing thick that takes the sheet's shape.
+    if (t.area > 0.0) {
+      const double count = sampling::estimate_sample_count(false, 0.0, t.area, dc);
+      if (count > 1.5 * double(s.sampling.max_samples)) return too_many_samples(s, k, dc, count);
+      t.volume = count * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+      volume += t.volume;
+    }
+    return {};
+  }
+  // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
+  // will accept before allocating it.
+  if (const double rough = sampling::estimate_sample_count(true, t.volume, t.area, dc);
+      rough > 1.5 * double(s.sampling.max_samples))
+    return too_many_samples(s, k, dc, rough);
+  std::size_t kept = 0;
+  for (const Vec3f& x : sampling::voxel_samples(*t.field, dc)) {
+    bool dropped = false;
+    for (const auto& b : s.sampling.sparse.drop_boxes)
+      dropped = dropped || ((x.array() >= b.min.array()).all() && (x.array() <= b.max.array()).all());
+    kept += dropped ? 0 : 1;
+  }
+  t.volume = double(kept) * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+  if (t.skin && t.skin->skin.joints.size() == t.mesh.vertices.size()) {
+    // A skinned mesh can lose volume at its bends (linear blend skinning of a coarse mesh cuts their corners),
+    // and the liquid keeps its own: sized to the bind volume, what the tightest pose has no room for is pushed
+    // out (huesitos.fbx keeps 88 % at worst). Sized to that pose, it fits at every one.
+    if (const double share = posed_volume_share(*t.skin, t.mesh); share < 1.0) {
+      spdlog::info("target {}: its posed mesh keeps {:.1f} % of its bind volume at the clip's tightest pose: the "
+                   "fluid is sized to that",
+                   k, 100.0 * share);
+      t.volume *= share;
+    }
+  }
+  volume += t.volume;
+  return {};
+}
+
+// A fluid column over the middle of each target's footprint holding the target's volume, a spacing above it.
+void place_fluid_columns(scene::Scene& s, const std::vector<TargetGeometry>& targets, float d) {
+  for (const auto& t : targets) {
+    if (!(t.volume > 0.0)) continue;
+    const Vec3f ext = t.box.max - t.box.min, mid = 0.5f * (t.box.min + t.box.max);
+    float fx = std::max(0.7f * ext.x(), 4.0f * d), fz = std::max(0.7f * ext.z(), 4.0f * d);
+    float h = static_cast<float>(t.volume / (double(fx) * fz));
+    // A very thin target would make a needle: widen the column to at most its own height.
+    if (h > 2.0f * std::max(fx, fz)) {
+      const float a = std::cbrt(static_cast<float>(t.volume) / 2.0f);
+      fx = fz = a;
+      h = 2.0f * a;
+    }
+    sim::FluidSource src;
+    src.shape = sim::FluidSource::Shape::Box;
+    src.min = Vec3f(mid.x() - 0.5f * fx, t.box.max.y() + d, mid.z() - 0.5f * fz);
+    src.max = Vec3f(mid.x() + 0.5f * fx, t.box.max.y() + d + h, mid.z() + 0.5f * fz);
+    s.fluid.push_back(src);
+  }
+}
+
+// Extends `box` by target t's box at every keyframe of its motion and, for a skinned target, by its posed mesh at 129
+// times of the clip's first play.
+void extend_by_target_path(Aabb& box, const scene::TargetSpec& spec, const TargetGeometry& t) {
+  box.extend(t.box.min), box.extend(t.box.max);
+  // A keyframed target sweeps a path: the domain holds its box at every keyframe.
+  const pose::TargetMotion motion{spec.keyframes, spec.smooth(), 0.5f * (t.box.min + t.box.max)};
+  for (const auto& key : motion.keys) {
+    const pose::Pose pose = motion.at(key.time);
+    for (int c = 0; c < 8; ++c)
+      box.extend(pose.apply(Vec3f(c & 1 ? t.box.max.x() : t.box.min.x(), c & 2 ? t.box.max.y() : t.box.min.y(),
+                                  c & 4 ? t.box.max.z() : t.box.min.z())));
+  }
+  // A skinned target's limbs swing out of its bind box (a walk's feet and hands by 0.2 m): the domain holds its
+  // posed mesh at 129 times of the clip's first play (then the keyframed pose at that time), so no limb meets a
+  // wall. Without this the walking character pressed its hands and feet flat against the walls, and 10 % of its
+  // fluid stayed there.
+  if (t.skin) {
+    const pose::TargetSkin& sk = *t.skin;
+    const auto& clip = sk.skin.clips[static_cast<std::size_t>(sk.clip)];
+    const double span = sk.spec.start + clip.duration / sk.spec.speed;
+    std::vector<io::Mat4f> K;
+    for (int q = 0; q <= 128; ++q) {
+      const double time = span * q / 128.0;
+      sk.world_joint_matrices(time, K);
+      const pose::Pose pose = motion.at(time);
+      for (std::size_t v = 0; v < t.mesh.vertices.size(); ++v)
+        box.extend(pose.apply(io::skin_point(K, sk.skin.joints[v], sk.skin.weights[v], t.mesh.vertices[v])));
+    }
+  }
+}
+
+// The domain: the targets' paths and the fluid, 2 H_c of margin at the sides and top, H_c below.
+void size_domain(scene::Scene& s, const std::vector<TargetGeometry>& targets, float hc) {
+  Aabb box;
+  for (std::size_t k = 0; k < targets.size(); ++k) extend_by_target_path(box, s.targets[k], targets[k]);
+  for (const auto& f : s.fluid) {
+    if (f.shape == sim::FluidSource::Shape::Box) {
+      box.extend(f.min), box.extend(f.max);
+    } else {
+      box.extend(f.center - Vec3f::Constant(f.radius)), box.extend(f.center + Vec3f::Constant(f.radius));
+    }
+  }
+  const float margin = 2.0f * hc;
+  s.domain.min = box.min - Vec3f(margin, 0.0f, margin);
+  s.domain.min.y() = std::min(box.min.y() - hc, box.min.y());
+  for (const auto& t : targets) s.domain.min.y() = std::min(s.domain.min.y(), t.box.min.y() - hc);
+  s.domain.max = box.max + Vec3f(margin, margin, margin);
+}
+
+}  // namespace
+
 Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   if (targets.empty()) return {};
   double volume = 0.0, area = 0.0;
   for (const auto& t : targets) volume += t.volume, area += t.area;
-  if (s.auto_radius) {
-    // d³ per sample (the blue-noise count is V/d³); an open sheet is sampled by its area instead.
-    const double n = static_cast<double>(s.sampling.auto_count);
-    const double d = volume > 0.0 ? std::cbrt(volume / n) : std::sqrt(area / n);
-    if (!(d > 0.0) || !std::isfinite(d)) return input_error("the targets have no volume and no area to size the particles by");
-    s.solver.particle_radius = static_cast<float>(0.5 * d);
-    FF_CHECK(s.solver.validate());
-  }
+  if (s.auto_radius) FF_CHECK(size_particles(s, volume, area));
   const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
   if (s.fluid.empty()) {
     // The fluid matches the volume the control samples will stand for: the voxel count of the solid at the
@@ -131,119 +260,15 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
     // sparse-sampling options remove.
     const float dc = s.sampling.spacing > 0.0f ? s.sampling.spacing : d;
     // Sizes are checked before anything is allocated for them (a tiny particle_radius would exhaust the memory).
-    const auto too_many = [&](std::size_t k, double count) {
-      return param_error(fmt::format("targets[{}]: a spacing of {:g} m would make about {:.3g} control samples, more than "
-                                     "the limit of {} (sampling.max_samples); increase solver.particle_radius or "
-                                     "sampling.spacing",
-                                     k, dc, count, s.sampling.max_samples));
-    };
     volume = 0.0;
-    for (std::size_t k = 0; k < targets.size(); ++k) {
-      auto& t = targets[k];
-      if (!(t.volume > 0.0)) {
-        // An open sheet (glTF2/simple_skin, a cloth, a terrain patch) is sampled as one layer of surface samples:
-        // its fluid is one particle per sample, a layer one spacing thick that takes the sheet's shape.
-        if (t.area > 0.0) {
-          const double count = sampling::estimate_sample_count(false, 0.0, t.area, dc);
-          if (count > 1.5 * double(s.sampling.max_samples)) return too_many(k, count);
-          t.volume = count * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
-          volume += t.volume;
-        }
-        continue;
-      }
-      // The voxel grid below grows as 1/dc³: refuse a spacing that would make more samples than the sampler
-      // will accept before allocating it.
-      if (const double rough = sampling::estimate_sample_count(true, t.volume, t.area, dc);
-          rough > 1.5 * double(s.sampling.max_samples))
-        return too_many(k, rough);
-      std::size_t kept = 0;
-      for (const Vec3f& x : sampling::voxel_samples(*t.field, dc)) {
-        bool dropped = false;
-        for (const auto& b : s.sampling.sparse.drop_boxes)
-          dropped = dropped || ((x.array() >= b.min.array()).all() && (x.array() <= b.max.array()).all());
-        kept += dropped ? 0 : 1;
-      }
-      t.volume = double(kept) * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
-      if (t.skin && t.skin->skin.joints.size() == t.mesh.vertices.size()) {
-        // A skinned mesh can lose volume at its bends (linear blend skinning of a coarse mesh cuts their corners),
-        // and the liquid keeps its own: sized to the bind volume, what the tightest pose has no room for is pushed
-        // out (huesitos.fbx keeps 88 % at worst). Sized to that pose, it fits at every one.
-        if (const double share = posed_volume_share(*t.skin, t.mesh); share < 1.0) {
-          spdlog::info("target {}: its posed mesh keeps {:.1f} % of its bind volume at the clip's tightest pose: the "
-                       "fluid is sized to that",
-                       k, 100.0 * share);
-          t.volume *= share;
-        }
-      }
-      volume += t.volume;
-    }
+    for (std::size_t k = 0; k < targets.size(); ++k) FF_CHECK(size_target_fluid(s, k, targets[k], dc, volume));
   }
   if (s.fluid.empty()) {
     if (!(volume > 0.0))
       return input_error("the targets have no volume and no area, so the fluid cannot be sized from them: add a \"fluid\" list");
-    for (const auto& t : targets) {
-      if (!(t.volume > 0.0)) continue;
-      // A column over the middle of the target's footprint holding the target's volume, a spacing above it.
-      const Vec3f ext = t.box.max - t.box.min, mid = 0.5f * (t.box.min + t.box.max);
-      float fx = std::max(0.7f * ext.x(), 4.0f * d), fz = std::max(0.7f * ext.z(), 4.0f * d);
-      float h = static_cast<float>(t.volume / (double(fx) * fz));
-      // A very thin target would make a needle: widen the column to at most its own height.
-      if (h > 2.0f * std::max(fx, fz)) {
-        const float a = std::cbrt(static_cast<float>(t.volume) / 2.0f);
-        fx = fz = a;
-        h = 2.0f * a;
-      }
-      sim::FluidSource src;
-      src.shape = sim::FluidSource::Shape::Box;
-      src.min = Vec3f(mid.x() - 0.5f * fx, t.box.max.y() + d, mid.z() - 0.5f * fz);
-      src.max = Vec3f(mid.x() + 0.5f * fx, t.box.max.y() + d + h, mid.z() + 0.5f * fz);
-      s.fluid.push_back(src);
-    }
+    place_fluid_columns(s, targets, d);
   }
-  if (s.auto_domain) {
-    Aabb box;
-    for (std::size_t k = 0; k < targets.size(); ++k) {
-      const auto& t = targets[k];
-      box.extend(t.box.min), box.extend(t.box.max);
-      // A keyframed target sweeps a path: the domain holds its box at every keyframe.
-      const pose::TargetMotion motion{s.targets[k].keyframes, s.targets[k].smooth(), 0.5f * (t.box.min + t.box.max)};
-      for (const auto& key : motion.keys) {
-        const pose::Pose pose = motion.at(key.time);
-        for (int c = 0; c < 8; ++c)
-          box.extend(pose.apply(Vec3f(c & 1 ? t.box.max.x() : t.box.min.x(), c & 2 ? t.box.max.y() : t.box.min.y(),
-                                      c & 4 ? t.box.max.z() : t.box.min.z())));
-      }
-      // A skinned target's limbs swing out of its bind box (a walk's feet and hands by 0.2 m): the domain holds its
-      // posed mesh at 129 times of the clip's first play (then the keyframed pose at that time), so no limb meets a
-      // wall. Without this the walking character pressed its hands and feet flat against the walls, and 10 % of its
-      // fluid stayed there.
-      if (t.skin) {
-        const pose::TargetSkin& sk = *t.skin;
-        const auto& clip = sk.skin.clips[static_cast<std::size_t>(sk.clip)];
-        const double span = sk.spec.start + clip.duration / sk.spec.speed;
-        std::vector<io::Mat4f> K;
-        for (int q = 0; q <= 128; ++q) {
-          const double time = span * q / 128.0;
-          sk.world_joint_matrices(time, K);
-          const pose::Pose pose = motion.at(time);
-          for (std::size_t v = 0; v < t.mesh.vertices.size(); ++v)
-            box.extend(pose.apply(io::skin_point(K, sk.skin.joints[v], sk.skin.weights[v], t.mesh.vertices[v])));
-        }
-      }
-    }
-    for (const auto& f : s.fluid) {
-      if (f.shape == sim::FluidSource::Shape::Box) {
-        box.extend(f.min), box.extend(f.max);
-      } else {
-        box.extend(f.center - Vec3f::Constant(f.radius)), box.extend(f.center + Vec3f::Constant(f.radius));
-      }
-    }
-    const float margin = 2.0f * hc;
-    s.domain.min = box.min - Vec3f(margin, 0.0f, margin);
-    s.domain.min.y() = std::min(box.min.y() - hc, box.min.y());
-    for (const auto& t : targets) s.domain.min.y() = std::min(s.domain.min.y(), t.box.min.y() - hc);
-    s.domain.max = box.max + Vec3f(margin, margin, margin);
-  }
+  if (s.auto_domain) size_domain(s, targets, hc);
   return s.validate();
 }
 

@@ -431,6 +431,39 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
   return {};
 }
 
+/// The output folder made ready before anything is written: writable, an interrupted run's partial files removed, a
+/// fresh run's old checkpoints removed, particles/ and checkpoint/ made. Inputs are all checked before it is touched.
+Status prepare_out_dir(const fs::path& out, const scene::Scene& scene, const RunOptions& opt, bool resume) {
+  if (opt.mesh && opt.vdb && !io::vdb_available())
+    return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
+  // Inputs are all checked before the output folder is touched.
+  FF_CHECK(io::ensure_writable_dir(out));
+  if (const auto n = io::remove_stale_temp_files(out))  // what a run or mesh killed mid-write left
+    spdlog::info("removed {} partial file(s) left by an interrupted run", n);
+  if (!resume) {  // a fresh run: an earlier run's checkpoints must not become this one's previous checkpoint
+    std::error_code ec;
+    fs::remove(checkpoint_file(out), ec);
+    fs::remove(previous_checkpoint_file(out), ec);
+  }
+  FF_CHECK(io::ensure_writable_dir(out / "particles"));
+  if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(out / "checkpoint"));
+  return {};
+}
+
+/// A fresh run's state: the initial particles, written as frame 0 and measured.
+Status start_fresh(const fs::path& out, const scene::Scene& scene, const TargetSetup& prepared,
+                   sim::ParticleSet&& initial, RunState& st) {
+  st.particles = std::move(initial);
+  std::vector<Vec3f> xs, vs;
+  std::vector<std::uint8_t> ts, flags;
+  FF_CHECK(write_frame(out, 0, st.particles, scene.output.velocity, scene.solver.spacing(), xs, vs, ts));
+  FrameRow row{0, 0.0, st.particles.size(), 0.0, 0, 0, 0.0, 0.0, core::peak_rss_mib()};
+  measure_frame(prepared.shapes, prepared.motions, 0.0, st.particles, scene.solver.particle_radius, 0, flags, row,
+                st.target_rows);
+  st.rows.push_back(row);
+  return {};
+}
+
 }  // namespace
 
 // Both bounds of the default animation, measured on the default scene (200 frames, 10k particles; bench/RESULTS.md,
@@ -473,19 +506,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
     assign_targets(initial, geometry);
   }
 
-  if (opt.mesh && opt.vdb && !io::vdb_available())
-    return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
-  // Inputs are all checked before the output folder is touched.
-  FF_CHECK(io::ensure_writable_dir(out));
-  if (const auto n = io::remove_stale_temp_files(out))  // what a run or mesh killed mid-write left
-    spdlog::info("removed {} partial file(s) left by an interrupted run", n);
-  if (!resume) {  // a fresh run: an earlier run's checkpoints must not become this one's previous checkpoint
-    std::error_code ec;
-    fs::remove(checkpoint_file(out), ec);
-    fs::remove(previous_checkpoint_file(out), ec);
-  }
-  FF_CHECK(io::ensure_writable_dir(out / "particles"));
-  if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(out / "checkpoint"));
+  FF_CHECK(prepare_out_dir(out, scene, opt, resume));
 
   // Control particles of every target (METHOD §a.1), cached in OUT/cache by mesh content and parameters.
   FF_TRY(TargetSetup prepared, setup_targets(scene, geometry, out / "cache", out, progress));
@@ -495,16 +516,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   if (opt.resume) {
     FF_TRY(resumed, resume_from_checkpoint(out, scene.hash, st));
   }
-  if (!resumed) {
-    st.particles = std::move(initial);
-    std::vector<Vec3f> xs, vs;
-    std::vector<std::uint8_t> ts, flags;
-    FF_CHECK(write_frame(out, 0, st.particles, scene.output.velocity, scene.solver.spacing(), xs, vs, ts));
-    FrameRow row{0, 0.0, st.particles.size(), 0.0, 0, 0, 0.0, 0.0, core::peak_rss_mib()};
-    measure_frame(prepared.shapes, prepared.motions, 0.0, st.particles, scene.solver.particle_radius, 0, flags, row,
-                  st.target_rows);
-    st.rows.push_back(row);
-  }
+  if (!resumed) FF_CHECK(start_fresh(out, scene, prepared, std::move(initial), st));
   if (st.particles.size() == 0) return input_error("the scene creates no fluid particles");
 
   sim::PbfSolver solver(scene.solver, scene.domain);
