@@ -201,15 +201,11 @@ void error_text(Shared& sh, const std::string& what) {
   sh.server->broadcast_text(json{{"type", "error"}, {"message", what}}.dump());
 }
 
-// The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
-void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
+// What the live simulation keeps between frames besides the scene: the HUD's rate and last metrics, when the surface
+// and the metrics were last made, and the frames' particle-id order buffers.
+struct LiveState {
   RateMeter rate;
-  // Real time paces at the scene's frame rate; --max-fps caps the wall rate below that (or, as fast as possible, alone).
-  const double cap = opt.max_fps > 0 ? opt.max_fps : 0.0;
-  const bool paced = opt.realtime || cap > 0;
-  Pacer pace(opt.realtime ? (cap > 0 ? std::min(cap, scene.fps()) : scene.fps()) : (cap > 0 ? cap : scene.fps()));
-  std::uint64_t frames = 0;
-  double step_total = 0.0, last_surface = -kSurfaceEvery, last_measure = -kMeasureEvery;
+  double last_surface = -kSurfaceEvery, last_measure = -kMeasureEvery;
   float shown_error = NAN;
   std::uint32_t shown_controlled = 0;
   int surface_frame = -1;
@@ -217,46 +213,62 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
   // particle between two frames, so frames go out in particle-id order (as a run's PLY frames are written).
   std::vector<Vec3f> by_id_x, by_id_v;
   std::vector<std::uint8_t> by_id_t;
-  const auto publish_particles = [&](const FrameInfo& info) {
-    scene.particles_by_id(by_id_x, by_id_v, by_id_t);
-    publish(sh, info, by_id_x, by_id_t);
-  };
-  publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
-  while (!sh.stop) {
-    for (Command& c : sh.commands.take()) {
-      Status st;
-      switch (c.kind) {
-        case Command::Kind::Play: sh.paused = false; break;
-        case Command::Kind::Pause: sh.paused = true; break;
-        case Command::Kind::Restart:
-          st = scene.restart();
-          rate.reset();
-          last_measure = -kMeasureEvery, shown_error = NAN, shown_controlled = 0;  // a fresh start: measure at once
-          if (st.ok()) publish_particles(FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
-          break;
-        case Command::Kind::Controller: st = scene.set_controller(c.name); break;
-        case Command::Kind::Pose: {
-          auto applied = scene.set_pose(c.target, c.pose);
-          if (!applied) st = applied.error();
-          else sh.server->broadcast_text(pose_json(c.target, *applied, scene.time()).dump());
-          break;
-        }
-        case Command::Kind::Mesh: st = scene.set_mesh(c.target, c.mesh, progress); break;
-        case Command::Kind::Seek: st = input_error("seek: a live simulation cannot seek (restart instead)"); break;
-        case Command::Kind::Surface:
-          sh.surface = c.on;
-          last_surface = -kSurfaceEvery, surface_frame = -1;  // one now, whatever the last one was
-          break;
-      }
-      if (!st.ok()) error_text(sh, st.error().message);
-      sh.set_hello(live_hello(scene, sh.paused, sh.surface));
-      // Everyone learns the new state (controller, meshes, paused) the way a new client would; a pose has its own
-      // message, sent above.
-      if (c.kind != Command::Kind::Pose) sh.server->broadcast_text(sh.hello_text());
+};
+
+// The scene's particles published in particle-id order.
+void publish_particles(const pipeline::LiveScene& scene, Shared& sh, LiveState& ls, const FrameInfo& info) {
+  scene.particles_by_id(ls.by_id_x, ls.by_id_v, ls.by_id_t);
+  publish(sh, info, ls.by_id_x, ls.by_id_t);
+}
+
+// One client command applied between frames, and everyone told the new state.
+void apply_command(Command& c, pipeline::LiveScene& scene, Shared& sh, LiveState& ls, core::Progress& progress) {
+  Status st;
+  switch (c.kind) {
+    case Command::Kind::Play: sh.paused = false; break;
+    case Command::Kind::Pause: sh.paused = true; break;
+    case Command::Kind::Restart:
+      st = scene.restart();
+      ls.rate.reset();
+      ls.last_measure = -kMeasureEvery, ls.shown_error = NAN, ls.shown_controlled = 0;  // a fresh start: measure at once
+      if (st.ok()) publish_particles(scene, sh, ls, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
+      break;
+    case Command::Kind::Controller: st = scene.set_controller(c.name); break;
+    case Command::Kind::Pose: {
+      auto applied = scene.set_pose(c.target, c.pose);
+      if (!applied) st = applied.error();
+      else sh.server->broadcast_text(pose_json(c.target, *applied, scene.time()).dump());
+      break;
     }
-    if (sh.surface && scene.frame() != surface_frame && pace.elapsed() - last_surface >= kSurfaceEvery) {
-      last_surface = pace.elapsed();
-      surface_frame = scene.frame();
+    case Command::Kind::Mesh: st = scene.set_mesh(c.target, c.mesh, progress); break;
+    case Command::Kind::Seek: st = input_error("seek: a live simulation cannot seek (restart instead)"); break;
+    case Command::Kind::Surface:
+      sh.surface = c.on;
+      ls.last_surface = -kSurfaceEvery, ls.surface_frame = -1;  // one now, whatever the last one was
+      break;
+  }
+  if (!st.ok()) error_text(sh, st.error().message);
+  sh.set_hello(live_hello(scene, sh.paused, sh.surface));
+  // Everyone learns the new state (controller, meshes, paused) the way a new client would; a pose has its own
+  // message, sent above.
+  if (c.kind != Command::Kind::Pose) sh.server->broadcast_text(sh.hello_text());
+}
+
+// The live simulation: commands between frames, one frame, publish, and (realtime) wait out the frame's wall time.
+void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, core::Progress& progress) {
+  LiveState ls;
+  // Real time paces at the scene's frame rate; --max-fps caps the wall rate below that (or, as fast as possible, alone).
+  const double cap = opt.max_fps > 0 ? opt.max_fps : 0.0;
+  const bool paced = opt.realtime || cap > 0;
+  Pacer pace(opt.realtime ? (cap > 0 ? std::min(cap, scene.fps()) : scene.fps()) : (cap > 0 ? cap : scene.fps()));
+  std::uint64_t frames = 0;
+  double step_total = 0.0;
+  publish_particles(scene, sh, ls, FrameInfo{0, 0.0, 0.0f, NAN, 0.0f, 0});
+  while (!sh.stop) {
+    for (Command& c : sh.commands.take()) apply_command(c, scene, sh, ls, progress);
+    if (sh.surface && scene.frame() != ls.surface_frame && pace.elapsed() - ls.last_surface >= kSurfaceEvery) {
+      ls.last_surface = pace.elapsed();
+      ls.surface_frame = scene.frame();
       publish_surface(sh, scene);
     }
     if (sh.paused) {
@@ -264,7 +276,7 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
       pace.hold();
       continue;
     }
-    const bool measure = pace.elapsed() - last_measure >= kMeasureEvery;
+    const bool measure = pace.elapsed() - ls.last_measure >= kMeasureEvery;
     auto f = scene.step(measure);
     if (!f) {
       error_text(sh, fmt::format("the simulation stopped: {}; restart to go on", f.error().message));
@@ -275,12 +287,12 @@ void live_loop(pipeline::LiveScene& scene, Shared& sh, const ServeOptions& opt, 
     ++frames;
     step_total += f->step_seconds;
     if (measure) {
-      last_measure = pace.elapsed();
-      shown_error = static_cast<float>(f->error_rate), shown_controlled = static_cast<std::uint32_t>(f->controlled);
+      ls.last_measure = pace.elapsed();
+      ls.shown_error = static_cast<float>(f->error_rate), ls.shown_controlled = static_cast<std::uint32_t>(f->controlled);
     }
     const FrameInfo info{static_cast<std::uint32_t>(f->frame), f->time, static_cast<float>(1e3 * f->step_seconds),
-                         shown_error, rate.tick(), shown_controlled};
-    publish_particles(info);
+                         ls.shown_error, ls.rate.tick(), ls.shown_controlled};
+    publish_particles(scene, sh, ls, info);
     if (paced) {
       // At most real time: the viewer shows the forming at its true speed when the simulation is faster.
       if (const double wait = pace.wait(); wait > 0) sh.commands.wait(wait, sh.stop);
@@ -342,19 +354,9 @@ void playback_loop(const Recording& rec, Shared& sh, const ServeOptions& opt) {
   }
 }
 
-}  // namespace
-
-Status serve(const ServeOptions& opt, core::Progress& progress) {
-  FF_CHECK(opt.validate());
-  FF_TRY(const fs::path web, find_web_dir(opt.web_dir));
-  const fs::path three = web.parent_path() / "node_modules" / "three";
-  if (!fs::is_regular_file(three / "build" / "three.module.js"))
-    return input_error(fmt::format("{}: three.js is not installed (npm install)", three.string()));
-
-  Shared sh;
-  std::unique_ptr<pipeline::LiveScene> live;
-  std::optional<Recording> rec;
-  std::vector<Mount> mounts{{"/", web}, {"/vendor/three/", three}};
+// The input: a run's folder is played back (its animation.glb served under /run/), a scene file is simulated live.
+Status open_input(const ServeOptions& opt, core::Progress& progress, Shared& sh,
+                  std::unique_ptr<pipeline::LiveScene>& live, std::optional<Recording>& rec, std::vector<Mount>& mounts) {
   std::error_code ec;
   if (fs::is_directory(opt.input, ec)) {
     FF_TRY(rec, pipeline::open_run(opt.input));
@@ -373,6 +375,23 @@ Status serve(const ServeOptions& opt, core::Progress& progress) {
     spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
     sh.set_hello(live_hello(*live, false, false));
   }
+  return {};
+}
+
+}  // namespace
+
+Status serve(const ServeOptions& opt, core::Progress& progress) {
+  FF_CHECK(opt.validate());
+  FF_TRY(const fs::path web, find_web_dir(opt.web_dir));
+  const fs::path three = web.parent_path() / "node_modules" / "three";
+  if (!fs::is_regular_file(three / "build" / "three.module.js"))
+    return input_error(fmt::format("{}: three.js is not installed (npm install)", three.string()));
+
+  Shared sh;
+  std::unique_ptr<pipeline::LiveScene> live;
+  std::optional<Recording> rec;
+  std::vector<Mount> mounts{{"/", web}, {"/vendor/three/", three}};
+  FF_CHECK(open_input(opt, progress, sh, live, rec, mounts));
   const StaticFiles files(mounts);
 
   std::mutex done_mu;
