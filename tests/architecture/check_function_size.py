@@ -134,7 +134,8 @@ def function_name(head):
     m = re.search(r"((?:[\w~]+\s*::\s*)*(?:operator\s*(?:\(\)|\[\]|[^\s(]+)|~?\w+))\s*(?:<[^()]*>)?\s*\(", flat)
     if not m:
         return "lambda"
-    name = re.sub(r"\s+", "", m.group(1))
+    name = re.sub(r"operator\s+(?=\w)", "operator ", m.group(1))
+    name = re.sub(r"\s+(?!\w)|(?<!operator)\s+", "", name)
     if name in ("if", "for", "while", "switch", "return", "sizeof", "decltype", "noexcept", "requires", "alignas"):
         return "lambda"
     return name
@@ -201,8 +202,8 @@ def scan(text):
                 stack.append(("fn", line, name))
                 in_fn = 1
             elif kind == "scope":
-                m = re.search(r"\b(?:class|struct|union)\s+(?:\[\[[^\]]*\]\]\s*)?(\w+)", h)
-                stack.append(("scope", line, m.group(1) if m else None))
+                names = re.findall(r"\b(?:class|struct|union)\s+(?:\[\[[^\]]*\]\]\s*)?(\w+)", h)
+                stack.append(("scope", line, names[-1] if names else None))
                 head = []
             else:
                 stack.append(("init", line, None))
