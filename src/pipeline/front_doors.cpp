@@ -23,9 +23,12 @@ namespace ff::pipeline {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-Status set_sampler(sampling::SamplingParams& params, std::string_view method, std::span<const float> drop_box) {
+Status set_sampler(sampling::SamplingParams& params, std::string_view method, std::span<const float> drop_box,
+                   std::string_view method_option) {
   const auto m = sampling::parse_method(method);
-  if (!m) return param_error(fmt::format("--method {} is not one of {}", method, core::choice_names(params.method)));
+  if (!m)
+    return param_error(
+        fmt::format("{} {} is not one of {}", method_option, method, core::choice_names(params.method)));
   params.method = *m;
   if (drop_box.size() % 6 != 0) return param_error("--drop-box takes 6 numbers per box: min x y z, max x y z");
   for (std::size_t i = 0; i < drop_box.size(); i += 6) {

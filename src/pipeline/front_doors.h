@@ -27,8 +27,10 @@ namespace ff::pipeline {
 // ---- Sampling a mesh into control particles (`fluidform sample`, Python's sample) ----
 
 /// `params` with the sampler named `method` ("blue-noise", "voxel", "surface") and the sparse-sampling drop boxes
-/// `drop_box` (6 numbers a box: min x y z, max x y z) added, then validated. Errors name the option.
-Status set_sampler(sampling::SamplingParams& params, std::string_view method, std::span<const float> drop_box = {});
+/// `drop_box` (6 numbers a box: min x y z, max x y z) added, then validated. Errors name the option as the caller
+/// spells it: `method_option` ("--method" on the command line, "method" in Python).
+Status set_sampler(sampling::SamplingParams& params, std::string_view method, std::span<const float> drop_box = {},
+                   std::string_view method_option = "--method");
 
 struct SampledMesh {
   sampling::ControlSet set;

@@ -55,7 +55,7 @@ Samples sample(const py::object& mesh, std::optional<std::size_t> count, std::op
                const std::string& method, std::uint64_t seed, const py::object& progress, const py::kwargs& kwargs) {
   sampling::SamplingParams params;
   read_kwargs(kwargs, "sampling", params);
-  check(pipeline::set_sampler(params, method));
+  check(pipeline::set_sampler(params, method, {}, "method"));
   params.seed = seed;
   if (count && spacing) raise(param_error("sample: give count or spacing, not both"));
   if (count) params.auto_count = *count;
