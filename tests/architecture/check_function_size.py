@@ -24,6 +24,14 @@ SCOPE_KEYWORD = re.compile(r"\b(namespace|class|struct|union|enum|concept|extern
 RAW_PREFIXES = ("R", "u8R", "uR", "UR", "LR")
 
 
+def blank_block_comment(text, i, out):
+    """The /* ... */ comment at `i` appended to `out` as spaces (its newlines kept); returns the index after it."""
+    end = text.find("*/", i + 2)
+    end = len(text) if end < 0 else end + 2
+    out.append(re.sub(r"[^\n]", " ", text[i:end]))
+    return end
+
+
 def blank(text):
     """`text` with comments, literals and preprocessor lines replaced by spaces; newlines (and so line numbers)
     are kept. Literals become "" or '' so that a head still reads as an expression."""
@@ -45,10 +53,7 @@ def blank(text):
                     i += 2
                     continue
                 if text.startswith("/*", i):
-                    end = text.find("*/", i + 2)
-                    end = n if end < 0 else end + 2
-                    out.append(re.sub(r"[^\n]", " ", text[i:end]))
-                    i = end
+                    i = blank_block_comment(text, i, out)
                     continue
                 out.append(" ")
                 i += 1
@@ -62,10 +67,7 @@ def blank(text):
             i = end
             continue
         if text.startswith("/*", i):
-            end = text.find("*/", i + 2)
-            end = n if end < 0 else end + 2
-            out.append(re.sub(r"[^\n]", " ", text[i:end]))
-            i = end
+            i = blank_block_comment(text, i, out)
             continue
         if c == '"':
             token = re.search(r"[A-Za-z_0-9]*$", "".join(out[-8:]) if out else "").group(0)
