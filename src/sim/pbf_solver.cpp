@@ -136,8 +136,9 @@ void PbfSolver::external_accelerations(ParticleSet& p, float dt, double time) {
     SurfaceTensionParams st;
     // σ is given at the reference spacing d_ref = 0.05 m (SPlisHSPlasH's default radius, where the paper's
     // σ = 0.05 comes from) and scaled by (d/d_ref)², so the surface acceleration σκ/m ∝ 1/d keeps its size
-    // relative to gravity at any resolution; the literal σ at d = 0.02 m pulls ~16× harder and jitters.
-    const float dr = params_.spacing() / 0.05f;
+    // relative to gravity at any resolution; the literal σ at d = 0.02 m pulls ~16× harder and jitters. The
+    // surface layer's acceleration still grows as 1/d: the capillary sub-step (advance()) allows for it.
+    const float dr = params_.spacing() / SolverParams::kSurfaceTensionRefSpacing;
     st.sigma = params_.surface_tension * dr * dr;
     st.samples_per_second = params_.surface_tension_samples;
     st.support = params_.support();
@@ -451,7 +452,9 @@ Result<FrameStats> PbfSolver::advance(ParticleSet& p, double time, double frame_
     return static_cast<double>(p.velocity[static_cast<std::size_t>(i)].squaredNorm());
   }));
   const double v_est = vmax + params_.gravity.norm() * frame_dt;
-  const double dt_cfl = cfl_dt(static_cast<float>(v_est), params_.spacing(), params_.cfl, params_.max_dt);
+  // and at most the capillary condition's sub-step (explicit surface tension is unstable above it).
+  const double dt_cfl =
+      std::min(double(cfl_dt(static_cast<float>(v_est), params_.spacing(), params_.cfl, params_.max_dt)), params_.capillary_dt());
   int steps = static_cast<int>(std::ceil(frame_dt / dt_cfl - 1e-9));
   steps = std::max(steps, 1);
   if (steps > params_.max_substeps) {

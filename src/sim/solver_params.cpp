@@ -2,11 +2,22 @@
 
 #include "core/params.h"
 
+#include <cmath>
+#include <limits>
+#include <numbers>
+
 #include <fmt/format.h>
 
 namespace ff::sim {
 using core::Bound;
 using core::check_range;
+
+double SolverParams::capillary_dt() const {
+  if (!(surface_tension > 0.0f) || !(capillary_cfl > 0.0f)) return std::numeric_limits<double>::infinity();
+  const double dref = kSurfaceTensionRefSpacing, h = support();
+  const double sigma = double(surface_tension) / (dref * dref);  // N/m: the pressure jump per unit curvature
+  return double(capillary_cfl) * std::sqrt(double(rest_density) * h * h * h / (2.0 * std::numbers::pi * sigma));
+}
 
 Status SolverParams::validate(std::string_view p) const {
   FF_CHECK(core::validate_fields(*this, p));

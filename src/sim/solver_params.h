@@ -13,7 +13,9 @@
 namespace ff::sim {
 
 struct SolverParams {
-  float particle_radius = 0.025f;  ///< r, m; spacing d = 2r. (1e-4, 10]
+  /// r, m; spacing d = 2r. (1e-6, 1e4]: wide, because targets come in any unit (a character exported in centimetres
+  /// is hundreds of "metres" tall); what a radius costs is checked against the target (the run's budget).
+  float particle_radius = 0.025f;
   float support_factor = 4.0f;     ///< H_p = support_factor · r (METHOD: 4r = 2d). [2.5, 8]
   int iterations = 4;              ///< density-constraint iterations per sub-step (minimum). [1, 100]
   int max_iterations = 30;         ///< more iterations while the mean density error exceeds max_density_error.
@@ -21,6 +23,12 @@ struct SolverParams {
   float max_density_error = 0.005f;  ///< target mean compression max(ρ/ρ0 − 1, 0) (0.5 %). (0, 1]
   float max_dt = 1.0f / 120.0f;    ///< largest sub-step, s (METHOD §0: 1/120). (0, 0.1]
   float cfl = 0.4f;                ///< largest displacement per sub-step, in spacings d. (0, 1]
+  /// Capillary time-step condition (Brackbill et al. 1992; Morris 2000 for SPH): Δt ≤ capillary_cfl ·
+  /// √(ρ0 H_p³ / (2π σ_eff)), σ_eff = surface_tension / d_ref² the surface tension as a pressure jump per curvature
+  /// (see surface_tension_ref_spacing). Explicit surface tension is stable only below it, and it shrinks as d^1.5,
+  /// faster than the CFL sub-step: without it the 100k bunny, formed, let 3 % of its fluid go once the CFL rule
+  /// allowed 3 sub-steps a frame (bench/RESULTS.md, "Detail at scale"). 0 = off. [0, 10]
+  float capillary_cfl = 0.4f;
   int max_substeps = 64;           ///< cap on sub-steps per output frame. [1, 10000]
   Vec3f gravity{0.0f, -10.0f, 0.0f};  ///< m/s² (paper: (0, −10, 0)). components in [−1000, 1000]
   float rest_density = 1000.0f;    ///< physical ρ0, kg/m³; the solver calibrates to the lattice sum. (0, 1e5]
@@ -42,18 +50,24 @@ struct SolverParams {
 
   float spacing() const { return 2.0f * particle_radius; }
   float support() const { return support_factor * particle_radius; }
+  /// σ is given at this spacing (SPlisHSPlasH's default radius, where the paper's σ = 0.05 comes from) and scaled by
+  /// (d/d_ref)² per particle, so the pressure jump σκ/d_ref² does not depend on the resolution.
+  static constexpr float kSurfaceTensionRefSpacing = 0.05f;
+  /// The capillary condition's largest sub-step, s (+∞ without surface tension or with the condition off).
+  double capillary_dt() const;
 
   /// The one list of the fields (core/fields.h): validation, the scene reader and writer, the key table.
   template <class S, class F>
   static void fields(S& s, F&& f) {
     using namespace core;
-    f("particle_radius", s.particle_radius, open_closed(1e-4, 10.0, "r, m; spacing d = 2r (default: from the targets)"));
+    f("particle_radius", s.particle_radius, open_closed(1e-6, 1e4, "r, m; spacing d = 2r (default: from the targets)"));
     f("support_factor", s.support_factor, closed(2.5, 8.0, "H_p = support_factor · r"));
     f("iterations", s.iterations, closed(1, 100, "density-constraint iterations per sub-step (minimum)"));
     f("max_iterations", s.max_iterations, closed(1, 1000, "more iterations while the density error is high; ≥ iterations"));
     f("max_density_error", s.max_density_error, open_closed(0.0, 1.0, "target mean compression max(ρ/ρ0 − 1, 0)"));
     f("max_dt", s.max_dt, open_closed(0.0, 0.1, "largest sub-step, s"));
     f("cfl", s.cfl, open_closed(0.0, 1.0, "largest displacement per sub-step, in spacings d"));
+    f("capillary_cfl", s.capillary_cfl, closed(0.0, 10.0, "capillary time-step condition: Δt ≤ this · √(ρ0 H_p³/(2π σ)); 0 = off"));
     f("max_substeps", s.max_substeps, closed(1, 10000, "cap on sub-steps per output frame"));
     f("gravity", s.gravity, closed(-1000.0, 1000.0, "m/s², each component"));
     f("rest_density", s.rest_density, open_closed(0.0, 1e5, "physical ρ0, kg/m³"));

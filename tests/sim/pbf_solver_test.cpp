@@ -84,6 +84,46 @@ TEST(PbfSolver, WallsKeepParticlesInsideAndCountIsConserved) {
   }
 }
 
+TEST(PbfSolver, CapillarySubStepShrinksAsTheSpacingToTheThreeHalves) {
+  SolverParams sp;
+  sp.particle_radius = 0.025f;  // d = 0.05 m, the reference spacing: σ_eff = 0.05 / 0.05² = 20 N/m, H_p = 0.1 m
+  const double h = 0.1, sigma = 20.0;
+  EXPECT_NEAR(sp.capillary_dt(), 0.4 * std::sqrt(1000.0 * h * h * h / (2.0 * M_PI * sigma)), 1e-7);
+  SolverParams fine = sp;
+  fine.particle_radius = 0.025f / 4.0f;
+  EXPECT_NEAR(fine.capillary_dt() / sp.capillary_dt(), 1.0 / 8.0, 1e-6);  // (1/4)^1.5
+  SolverParams off = fine;
+  off.capillary_cfl = 0.0f;
+  EXPECT_TRUE(std::isinf(off.capillary_dt()));
+  off = fine;
+  off.surface_tension = 0.0f;
+  EXPECT_TRUE(std::isinf(off.capillary_dt()));
+}
+
+TEST(PbfSolver, AFrameTakesTheSubStepsTheCapillaryConditionNeeds) {
+  // A resting drop at d = 5 mm: the CFL rule alone allows 1/120 s (2 sub-steps of a 1/60 s frame); the capillary
+  // condition allows ~1.13 ms (H_p = 1 cm), so 15 sub-steps; with it off, 2.
+  SolverParams sp;
+  sp.particle_radius = 0.0025f;
+  sp.gravity = Vec3f::Zero();
+  const Domain dom{Vec3f::Zero(), Vec3f(0.1f, 0.1f, 0.1f)};
+  FluidSource s{FluidSource::Shape::Sphere};
+  s.center = Vec3f(0.05f, 0.05f, 0.05f);
+  s.radius = 0.02f;
+  const int expected = static_cast<int>(std::ceil((1.0 / 60.0) / sp.capillary_dt() - 1e-9));
+  EXPECT_EQ(expected, 15);
+  for (const float c : {0.4f, 0.0f}) {
+    sp.capillary_cfl = c;
+    ParticleSet p;
+    ASSERT_TRUE(fill_sources(std::vector<FluidSource>{s}, dom, sp.particle_radius, p).ok());
+    PbfSolver solver(sp, dom);
+    NoController none;
+    const auto st = solver.advance(p, 0.0, 1.0 / 60.0, none);
+    ASSERT_TRUE(st.has_value());
+    EXPECT_EQ(st->substeps, c > 0.0f ? expected : 2) << "capillary_cfl " << c;
+  }
+}
+
 TEST(PbfSolver, NonFiniteStateIsReportedWithTheParticleId) {
   SolverParams sp;
   const Domain dom{Vec3f::Zero(), Vec3f::Constant(0.5f)};
