@@ -38,4 +38,25 @@ struct SeriesSummary {
 /// Summary of `values` (E per frame, %) at `times` (s of simulated time; same length, increasing).
 SeriesSummary summarize(std::span<const double> values, std::span<const double> times);
 
+/// When a shape counts as formed: at least `min_inside` of the fluid inside its target and at most `max_splash` of it
+/// splashed (fractions, the floor of bench/RESULTS.md's quality table), held for `hold_s` seconds of simulated time.
+struct FormedThresholds {
+  double min_inside = 0.99;
+  double max_splash = 0.005;
+  double hold_s = 1.0;
+};
+inline bool is_formed(double inside, double splash, const FormedThresholds& th) {
+  return inside >= th.min_inside && splash <= th.max_splash;  // false for NaN
+}
+
+/// The first time from which the shape stays formed (`is_formed` at every frame) for th.hold_s, or for the rest of
+/// the run when that is shorter; NaN when there is none (the shape never formed, or let go within th.hold_s each
+/// time). A shape that forms, lets go and forms again counts from the forming that held.
+double formed_since(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,
+                    const FormedThresholds& th = {});
+
+/// Whether the last frames, th.hold_s of them or more, are all formed (the stop rule of a run without --frames).
+bool formed_held(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,
+                 const FormedThresholds& th = {});
+
 }  // namespace ff::metrics

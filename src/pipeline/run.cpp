@@ -99,6 +99,14 @@ bool formed_and_held(const std::vector<FrameRow>& rows, int window, int min_fram
   return hi - lo <= 0.05 + 0.05 * (sum / window);
 }
 
+/// The shape is formed (metrics::FormedThresholds: inside and splash) and has stayed so for the last second: with
+/// formed_and_held's E, the stop rule of a run without --frames.
+bool shape_held(const std::vector<FrameRow>& rows) {
+  std::vector<double> inside, splash, times;
+  for (const auto& r : rows) inside.push_back(r.inside), splash.push_back(r.splash), times.push_back(r.time);
+  return metrics::formed_held(inside, splash, times);
+}
+
 }  // namespace
 
 namespace {
@@ -188,9 +196,11 @@ Status write_checkpoint(const fs::path& out, const sim::Checkpoint& ck) {
 void shape_totals(const RunFacts& facts, const RunState& st, json& t) {
   const auto& rows = st.rows;
   const double frame_dt = 1.0 / facts.scene.output.fps, d = facts.scene.solver.spacing();
-  std::vector<double> e, times;
-  for (const auto& r : rows) e.push_back(r.error_rate), times.push_back(r.time);
+  std::vector<double> e, times, inside, splash;
+  for (const auto& r : rows)
+    e.push_back(r.error_rate), times.push_back(r.time), inside.push_back(r.inside), splash.push_back(r.splash);
   const auto sum = metrics::summarize(e, times);
+  const metrics::FormedThresholds formed;
   const auto tail = metrics::tail_window(rows.size(), 0.2);
   auto tail_mean = [&](auto field) {
     std::vector<double> v;
@@ -200,7 +210,12 @@ void shape_totals(const RunFacts& facts, const RunState& st, json& t) {
   const auto& last = rows.back();
   t["error_rate_pct"] = metrics::json_number(sum.steady);
   t["error_rate_final_pct"] = metrics::json_number(sum.final_value);
-  t["time_to_form_s"] = metrics::json_number(sum.time_to_form);
+  // Formed: from when inside and splash stay within the thresholds (null: never); settled: from when E stays within
+  // 10 % of its steady value.
+  t["time_to_form_s"] = metrics::json_number(metrics::formed_since(inside, splash, times, formed));
+  t["formed_when"] = {{"min_inside_fraction", formed.min_inside}, {"max_splash_fraction", formed.max_splash},
+                      {"hold_s", formed.hold_s}};
+  t["time_to_settle_s"] = metrics::json_number(sum.time_to_form);
   t["time_to_form_stable_s"] = metrics::json_number(sum.time_to_form_stable);
   t["e_fwd_m"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.e_fwd; }));
   t["e_bwd_m"] = metrics::json_number(tail_mean([](const FrameRow& r) { return r.e_bwd; }));
@@ -212,15 +227,18 @@ void shape_totals(const RunFacts& facts, const RunState& st, json& t) {
   json per = json::array();
   double es_w = 0.0, es_n = 0.0;
   for (std::size_t k = 0; k < facts.shapes.size(); ++k) {
-    std::vector<double> ek, tk;
+    std::vector<double> ek, tk, ik, sk_splash;
     const TargetRow* lastk = nullptr;
     for (const auto& r : st.target_rows)
-      if (r.target == static_cast<int>(k)) ek.push_back(r.m.error_rate), tk.push_back(r.frame * frame_dt), lastk = &r;
+      if (r.target == static_cast<int>(k)) {
+        ek.push_back(r.m.error_rate), tk.push_back(r.frame * frame_dt), lastk = &r;
+        ik.push_back(r.m.inside_fraction), sk_splash.push_back(r.m.splash_fraction);
+      }
     const auto sk = metrics::summarize(ek, tk);
     const auto& shape = facts.shapes[k].shape.back();
     per.push_back({{"target", k},
                    {"error_rate_pct", metrics::json_number(sk.steady)},
-                   {"time_to_form_s", metrics::json_number(sk.time_to_form)},
+                   {"time_to_form_s", metrics::json_number(metrics::formed_since(ik, sk_splash, tk, formed))},
                    {"fluid", lastk ? lastk->m.fluid : 0},
                    {"controlled", lastk ? lastk->m.controlled : 0},
                    {"inside_fraction", lastk ? metrics::json_number(lastk->m.inside_fraction) : json(nullptr)},
@@ -331,7 +349,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
                   st.target_rows);
     st.rows.push_back(row);
     last_frame = f;
-    const bool done = loop.run_until_formed && formed_and_held(st.rows, window, 2 * window);
+    const bool done = loop.run_until_formed && formed_and_held(st.rows, window, 2 * window) && shape_held(st.rows);
     if (scene.output.checkpoint_every > 0 && (f % scene.output.checkpoint_every == 0 || f == loop.frames || done)) {
       sim::Checkpoint ck{f + 1, st.time, scene.hash,
                          json{{"rows", metrics::rows_to_json(st.rows)}, {"target_rows", metrics::target_rows_to_json(st.target_rows)}}.dump(),
@@ -343,8 +361,9 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
     if (done) break;
   }
   progress.end();
-  if (loop.run_until_formed && last_frame == loop.frames && !formed_and_held(st.rows, window, 2 * window))
-    spdlog::warn("the shape had not settled after {} frames (the cap); pass --frames to run longer", loop.frames);
+  if (loop.run_until_formed && last_frame == loop.frames &&
+      !(formed_and_held(st.rows, window, 2 * window) && shape_held(st.rows)))
+    spdlog::warn("the shape had not formed and settled after {} frames (the cap); pass --frames to run longer", loop.frames);
   return last_frame;
 }
 

@@ -2,6 +2,7 @@
 // Drives the stages for `fluidform run`: the only place where scene, meshes, solver and writers meet.
 #include "core/error.h"
 #include "core/progress.h"
+#include "metrics/summary.h"
 #include "scene/scene.h"
 
 #include <filesystem>
@@ -39,7 +40,9 @@ struct RunSummary {
   // Shape metrics (METHOD §d), when the scene has targets.
   bool has_targets = false;
   std::size_t control_particles = 0, controlled = 0;
+  /// time_to_form: s from which the shape stayed formed by `formed`'s thresholds; NaN: it never did.
   double error_rate = 0, inside_fraction = 0, splash_fraction = 0, time_to_form = 0, e_fwd_all = 0, error_spacings = 0;
+  metrics::FormedThresholds formed;
   // Meshing (when RunOptions::mesh).
   std::size_t mesh_triangles = 0, mesh_frames = 0;
   bool mesh_ok = false;

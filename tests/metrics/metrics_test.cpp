@@ -326,5 +326,31 @@ TEST(Summary, UndefinedFramesAndWindows) {
   EXPECT_TRUE(std::isnan(empty.time_to_form));
 }
 
+TEST(Summary, FormedSinceNeedsTheShapeToHold) {
+  // 10 frames a second. Formed (≥ 99 % inside, ≤ 0.5 % splash) at frames 3–6 (0.4 s), lets go at 7 (the 100k bunny of
+  // bench/RESULTS.md did this), forms again at 9 and holds to the end (frame 24).
+  std::vector<double> inside, splash, t;
+  for (int f = 0; f < 25; ++f) {
+    const bool formed = (f >= 3 && f <= 6) || f >= 9;
+    inside.push_back(formed ? 0.995 : 0.96);
+    splash.push_back(formed ? 0.003 : 0.02);
+    t.push_back(0.1 * f);
+  }
+  EXPECT_DOUBLE_EQ(formed_since(inside, splash, t), t[9]);  // not 0.3 s: that forming held 0.4 s
+  EXPECT_TRUE(formed_held(inside, splash, t));               // frames 14–24: 1 s
+  // The same run cut at frame 16: formed to the end from 0.9 s, held 0.7 s: formed since 0.9 s, not yet held.
+  const auto cut = [](const std::vector<double>& v) { return std::span<const double>(v).first(17); };
+  EXPECT_DOUBLE_EQ(formed_since(cut(inside), cut(splash), cut(t)), t[9]);
+  EXPECT_FALSE(formed_held(cut(inside), cut(splash), cut(t)));
+  // Inside but splashing is not formed; nor is NaN; a shape that never forms has no time.
+  splash.assign(splash.size(), 0.006);
+  EXPECT_TRUE(std::isnan(formed_since(inside, splash, t)));
+  EXPECT_FALSE(formed_held(inside, splash, t));
+  EXPECT_FALSE(is_formed(std::numeric_limits<double>::quiet_NaN(), 0.0, {}));
+  // A looser threshold takes every frame as formed.
+  EXPECT_DOUBLE_EQ(formed_since(inside, splash, t, {.min_inside = 0.95, .max_splash = 0.03}), t[0]);
+  EXPECT_TRUE(std::isnan(formed_since({}, {}, {})));
+}
+
 }  // namespace
 }  // namespace ff::metrics
