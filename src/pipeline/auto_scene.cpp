@@ -246,13 +246,34 @@ void size_domain(scene::Scene& s, const std::vector<TargetGeometry>& targets, fl
   s.domain.max = box.max + Vec3f(margin, margin, margin);
 }
 
+// Targets far outside human scale were most likely modelled in other units (many tools export characters in
+// centimetres): they run as they are, and one line says which scale would make them metres.
+void suggest_unit_scale(const std::vector<TargetGeometry>& targets) {
+  Aabb box;
+  for (const auto& t : targets) box.extend(t.box.min), box.extend(t.box.max);
+  const double size = box.size().maxCoeff();
+  if (!(size > 50.0) || !std::isfinite(size)) return;
+  const double scale = size * 0.01 <= 50.0 ? 0.01 : 0.001;
+  spdlog::warn("the targets are {:.0f} m across, far outside human scale: if the file is in {}, add \"scale\": {:g} to "
+               "each target (forming takes longer the larger the shape)",
+               size, scale == 0.01 ? "centimetres" : "millimetres", scale);
+}
+
+// Each closed target's thinnest walls (sampling/thickness.h), for thin_wall_warning and report.json.
+void measure_walls(std::vector<TargetGeometry>& targets) {
+  for (auto& t : targets)
+    if (t.field && t.volume > 0.0) t.thickness = sampling::measure_thickness(*t.field, t.mesh);  // not an open sheet
+}
+
 }  // namespace
 
 Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   if (targets.empty()) return {};
   double volume = 0.0, area = 0.0;
   for (const auto& t : targets) volume += t.volume, area += t.area;
+  suggest_unit_scale(targets);
   if (s.auto_radius) FF_CHECK(size_particles(s, volume, area));
+  measure_walls(targets);
   const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
   if (s.fluid.empty()) {
     // The fluid matches the volume the control samples will stand for: the voxel count of the solid at the
@@ -270,6 +291,20 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   }
   if (s.auto_domain) size_domain(s, targets, hc);
   return s.validate();
+}
+
+std::optional<std::string> thin_wall_warning(const scene::Scene& s, std::size_t k, const TargetGeometry& t) {
+  constexpr double kAcross = 3.0;
+  const double d = s.sampling.spacing > 0.0f ? s.sampling.spacing : s.solver.spacing();
+  if (!t.thickness || t.thickness->thinnest >= kAcross * d) return std::nullopt;
+  const double need = t.thickness->thinnest / kAcross;
+  const Vec3f& w = t.thickness->where;
+  return fmt::format("target {}: walls {:.3g} m thin near ({:.3g}, {:.3g}, {:.3g}) are {:.1f} spacings across (d = {:.3g} m) "
+                     "and may come out with holes: {:g} need d <= {:.3g} m{}",
+                     k, t.thickness->thinnest, w.x(), w.y(), w.z(), t.thickness->thinnest / d, d, kAcross, need,
+                     s.auto_radius ? fmt::format(", about {:.3g} control particles (sampling.auto_count)",
+                                                 double(s.sampling.auto_count) * std::pow(d / need, 3.0))
+                                   : std::string(" (solver.particle_radius)"));
 }
 
 void assign_targets(sim::ParticleSet& p, const std::vector<TargetGeometry>& targets) {

@@ -12,10 +12,12 @@
 #include "scene/scene.h"
 #include "io/triangle_mesh.h"
 #include "sampling/mesh_field.h"
+#include "sampling/thickness.h"
 #include "sim/particle_set.h"
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace ff::pipeline {
@@ -29,6 +31,8 @@ struct TargetGeometry {
   Aabb box;
   /// The skin of a target whose scene gives it an animation clip (io/skin.h; the clip found): null otherwise.
   std::shared_ptr<const pose::TargetSkin> skin;
+  /// Its thinnest walls (complete_scene; nullopt for an open sheet): what a spacing must resolve.
+  std::optional<sampling::Thickness> thickness;
 };
 
 /// The skin of a target with an animation clip, for `mesh` (load_mesh's, the target's transform applied). Errors
@@ -53,8 +57,13 @@ Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene
 /// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at
 /// the sampling spacing, sparse-sampling drops removed; an open sheet's: one spacing³ per surface sample), which is what
 /// the fluid is sized and shared by. An animated target's is that times its posed mesh's smallest share of its bind
-/// volume over the clip (posed_volume_share), so that its fluid fits inside it at every pose.
+/// volume over the clip (posed_volume_share), so that its fluid fits inside it at every pose. Each closed target's
+/// thinnest walls are measured into its `thickness`.
 Status complete_scene(scene::Scene& scene, std::vector<TargetGeometry>& targets);
+
+/// One line when target k's thinnest walls (TargetGeometry::thickness) are under 3 control spacings (they may come out
+/// of the simulation with holes): where, how thin, and the spacing and `sampling.auto_count` that would resolve them.
+std::optional<std::string> thin_wall_warning(const scene::Scene& s, std::size_t k, const TargetGeometry& t);
 
 /// Shares the fluid out among the targets by volume (METHOD: "fluid is shared out by volume"): target t gets
 /// round(N V_t / ΣV) particles, the ones nearest its centre among those not yet taken, larger targets first.

@@ -53,6 +53,13 @@ Result<TargetSetup> setup_targets(const scene::Scene& scene, const std::vector<T
     out.info.push_back({{"mesh", scene.targets[i].mesh.string()}, {"control_particles", tc.set.size()},
                         {"spacing", tc.set.spacing}, {"volume", geometry[i].volume}, {"cached", tc.from_cache},
                         {"controls", fs::relative(tc.cache_file, report_dir).string()}});
+    if (const auto& th = geometry[i].thickness) {  // its thinnest walls (sampling/thickness.h), and in spacings
+      const Vec3f& w = th->where;
+      out.info.back()["thinnest_wall"] = {{"m", th->thinnest}, {"spacings", th->thinnest / tc.set.spacing},
+                                          {"near", {w.x(), w.y(), w.z()}},
+                                          {"median_m", std::isfinite(th->median) ? json(th->median) : json(nullptr)}};
+    }
+    if (const auto warning = thin_wall_warning(scene, i, geometry[i])) spdlog::warn("{}", *warning);
     out.control_count += tc.set.size();
     auto shape = metrics::TargetShape::build(geometry[i].mesh, tc.set.position, tc.set.spacing);
     if (!shape) return Error{shape.error().kind, fmt::format("targets[{}]: {}", i, shape.error().message)};

@@ -413,6 +413,55 @@ TEST(Cli, RunWithOnlyATargetFormsItAndReportsShapeMetrics) {
   EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
 }
 
+// A target in other units (a character exported in centimetres is hundreds of "metres" tall) runs with the defaults:
+// its derived radius is far above any absolute limit a hand-written scene would need, and one line suggests the scale.
+TEST(Cli, ATargetHundredsOfMetresTallRunsAndSuggestsTheUnitScale) {
+  const auto dir = test::temp_dir("huge");
+  test::write_obj(dir / "ball.obj", test::sphere_mesh(150.0f, 3));  // 300 m across
+  const auto scene = write_scene(dir, R"({"targets": [{"mesh": "ball.obj"}], "sampling": {"auto_count": 400}})");
+  const auto r = run({"run", scene.string(), "-o", (dir / "out").string(), "--frames", "2", "--no-mesh"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("300 m across, far outside human scale: if the file is in centimetres, add \"scale\": 0.01"),
+            std::string::npos) << r.err;
+  const auto rep = nlohmann::json::parse(read_file(dir / "out" / "report.json"));
+  const double radius = rep["scene"]["solver"]["particle_radius"].get<double>();
+  EXPECT_GT(radius, 10.0);  // the old absolute limit
+  EXPECT_LT(radius, 30.0);  // ~400 samples in a 300 m ball: d ≈ 30 m
+  // Its thinnest wall is its diameter (sampling/thickness.h), ~4.6 spacings: no thin-wall line.
+  const auto& wall = rep["targets"][0]["thinnest_wall"];
+  EXPECT_NEAR(wall["m"].get<double>(), 300.0, 9.0) << wall.dump();
+  EXPECT_NEAR(wall["spacings"].get<double>(), 300.0 / (2.0 * radius), 0.5) << wall.dump();
+  EXPECT_EQ(r.err.find("may come out with holes"), std::string::npos) << r.err;
+  // A human-sized target gets no such line.
+  const auto small = write_scene(dir, R"({"targets": [{"mesh": "small.obj"}], "sampling": {"auto_count": 400}})");
+  test::write_obj(dir / "small.obj", test::sphere_mesh(0.5f, 3));
+  const auto q = run({"run", small.string(), "-o", (dir / "out2").string(), "--frames", "2", "--no-mesh"});
+  ASSERT_EQ(q.code, 0) << q.err;
+  EXPECT_EQ(q.err.find("human scale"), std::string::npos) << q.err;
+}
+
+// A thin-walled target (a 2 cm plate at ~400 particles: d ≈ 3.7 cm) gets one line naming its thin walls and the count
+// that would resolve them, and report.json records them; a bad input still fails with one line, before it.
+TEST(Cli, ThinWallsAreMeasuredAndNamed) {
+  const auto dir = test::temp_dir("thin");
+  test::write_obj(dir / "plate.obj", test::box(Vec3f(0.5f, 0.01f, 0.5f), 8));
+  const auto scene = write_scene(dir, R"({"targets": [{"mesh": "plate.obj"}], "sampling": {"auto_count": 400}})");
+  const auto r = run({"run", scene.string(), "-o", (dir / "out").string(), "--frames", "1", "--no-mesh"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::size_t lines = 0;
+  for (std::size_t at = 0; (at = r.err.find("may come out with holes", at)) != std::string::npos; ++at) ++lines;
+  EXPECT_EQ(lines, 1u) << r.err;
+  EXPECT_NE(r.err.find("target 0: walls 0.0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("control particles (sampling.auto_count)"), std::string::npos) << r.err;
+  const auto rep = nlohmann::json::parse(read_file(dir / "out" / "report.json"));
+  const auto& wall = rep["targets"][0]["thinnest_wall"];
+  EXPECT_NEAR(wall["m"].get<double>(), 0.02, 0.002) << wall.dump();
+  EXPECT_LT(wall["spacings"].get<double>(), 1.0) << wall.dump();
+  const auto bad = run({"-q", "run", scene.string(), "-o", (dir / "out2").string(), "--max-memory", "1"});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
+}
+
 // A mirrored target (a negative scale, as artists mirror models) forms as well as the original, and sampling,
 // control, metrics and export agree on it: the samples, the fluid and the final mesh are the mirror image's.
 TEST(Cli, AMirroredBunnyFormsLikeTheOriginal) {
