@@ -2,9 +2,9 @@
 // memory is its own), with the defaults only, then one table of the paper's Table 3 columns and the numbers
 // that keep E honest (METHOD §d). Scenes: the bunny, a thin-limbed star figure, a hollow vase, a torus, a
 // lattice of thin tubes, the bunny with 30 % of its samples removed in a box, and three targets at once.
-//   build/release/bench/bench_scenes [--quick] [--ablations] [--speed] [--only NAME] [--frames N] [--keep DIR]
-//                                    [--patch JSON]
-// --quick: ~3k control particles per scene instead of ~10k. --ablations: the bunny and the star with each
+//   build/release/bench/bench_scenes [--quick] [--ablations] [--speed] [--particles N] [--only NAME] [--frames N]
+//                                    [--keep DIR] [--patch JSON]
+// --quick: ~3k control particles per scene instead of ~10k; --particles N: ~N. --ablations: the bunny and the star with each
 // component of `adaptive` switched off or set to its paper reading. --speed: the speed scenes, the bunny
 // at ~10k and ~100k particles and the three-target scene. Runs stop once formed (cap 600 frames) unless --frames
 // is given. Frame times are medians over the run's frames (metrics.csv): over all of them, and over the frames
@@ -55,8 +55,12 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
 }
 
-// Median step time (ms) over all simulated frames of metrics.csv, and over those after `formed_s` (NaN if none).
-std::pair<double, double> frame_medians(const fs::path& csv, double formed_s) {
+// What metrics.csv says besides the report's totals: the median step time (ms) over all simulated frames and over
+// those after `formed_s`, and from `formed_s` on the least inside and the most splash (%; NaN when never formed).
+struct FrameFigures {
+  double all_ms = NAN, formed_ms = NAN, least_inside = NAN, most_splash = NAN;
+};
+FrameFigures frame_figures(const fs::path& csv, double formed_s) {
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
@@ -64,16 +68,24 @@ std::pair<double, double> frame_medians(const fs::path& csv, double formed_s) {
   for (std::stringstream ss(line); std::getline(ss, line, ',');) head.push_back(line);
   const auto col = [&](const char* name) { return std::find(head.begin(), head.end(), name) - head.begin(); };
   const auto c_time = col("time_s"), c_step = col("step_time_s"), c_sub = col("substeps");
+  const auto c_inside = col("inside_fraction"), c_splash = col("splash_fraction");
   std::vector<double> all, formed;
+  FrameFigures r;
   while (std::getline(in, line)) {
     std::vector<std::string> f;
     for (std::stringstream ss(line); std::getline(ss, line, ',');) f.push_back(line);
     if (f.size() < head.size() || std::stod(f[static_cast<std::size_t>(c_sub)]) == 0) continue;  // frame 0: not stepped
     const double ms = 1e3 * std::stod(f[static_cast<std::size_t>(c_step)]);
     all.push_back(ms);
-    if (std::isfinite(formed_s) && std::stod(f[static_cast<std::size_t>(c_time)]) > formed_s) formed.push_back(ms);
+    if (!std::isfinite(formed_s) || std::stod(f[static_cast<std::size_t>(c_time)]) < formed_s - 1e-9) continue;
+    formed.push_back(ms);
+    const double inside = 100 * std::stod(f[static_cast<std::size_t>(c_inside)]);
+    const double splash = 100 * std::stod(f[static_cast<std::size_t>(c_splash)]);
+    r.least_inside = std::isnan(r.least_inside) ? inside : std::min(r.least_inside, inside);
+    r.most_splash = std::isnan(r.most_splash) ? splash : std::max(r.most_splash, splash);
   }
-  return {median(all), median(formed)};
+  r.all_ms = median(all), r.formed_ms = median(formed);
+  return r;
 }
 
 }  // namespace
@@ -81,6 +93,7 @@ std::pair<double, double> frame_medians(const fs::path& csv, double formed_s) {
 int main(int argc, char** argv) {
   bool quick = false, ablations = false, speed = false;
   std::string only, frames;
+  int particles = 0;
   json patch = json::object();
   fs::path keep;
   for (int i = 1; i < argc; ++i) {
@@ -90,6 +103,7 @@ int main(int argc, char** argv) {
     else if (a == "--speed") speed = true;
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--frames" && i + 1 < argc) frames = argv[++i];
+    else if (a == "--particles" && i + 1 < argc) particles = std::atoi(argv[++i]);
     else if (a == "--keep" && i + 1 < argc) keep = argv[++i];
     else if (a == "--patch" && i + 1 < argc) {
       patch = json::parse(argv[++i], nullptr, false);
@@ -99,8 +113,8 @@ int main(int argc, char** argv) {
       }
     }
     else {
-      fmt::print(stderr, "usage: bench_scenes [--quick] [--ablations] [--speed] [--only NAME] [--frames N] [--keep DIR] "
-                          "[--patch JSON]\n");
+      fmt::print(stderr, "usage: bench_scenes [--quick] [--ablations] [--speed] [--particles N] [--only NAME] [--frames N] "
+                          "[--keep DIR] [--patch JSON]\n");
       return 2;
     }
   }
@@ -116,7 +130,11 @@ int main(int argc, char** argv) {
   test::write_obj(dir / "vase.obj", test::vase(1.0f, 0.35f, 0.06f));
   test::write_obj(dir / "torus.obj", test::torus(0.4f, 0.12f, 64, 24));
   test::write_obj(dir / "lattice.obj", test::tube_lattice());
-  const int count = quick ? 3000 : 10000;
+  if (particles != 0 && !(particles >= 100 && particles <= 100'000'000)) {
+    fmt::print(stderr, "bench_scenes: --particles wants a count in [100, 1e8]\n");
+    return 2;
+  }
+  const int count = particles ? particles : quick ? 3000 : 10000;
   auto target = [](const char* mesh, json extra = json::object()) {
     json t = {{"mesh", mesh}};
     for (auto& [k, v] : extra.items()) t[k] = v;
@@ -162,8 +180,9 @@ int main(int argc, char** argv) {
         scenes.push_back({shape + ", " + vname, scene({t}, {{"controller", {{"adaptive", v}}}})});
   }
   fmt::print("| scene | particles | controls | controlled/N_c | E (%) | E (d) | inside (%) | splash (%) | E_fwd all (m) "
-             "| time to form (s) | frame, all (ms) | frame, formed (ms) | fps, formed | memory (MiB) |\n"
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+             "| time to form (s) | least inside, formed (%) | most splash, formed (%) | frame, all (ms) | frame, formed (ms) "
+             "| fps, formed | memory (MiB) |\n"
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (std::size_t k = 0; k < scenes.size(); ++k) {
     const auto& s = scenes[k];
     if (!only.empty() && s.name.find(only) == std::string::npos) continue;
@@ -177,17 +196,20 @@ int main(int argc, char** argv) {
     std::ifstream in(out / "report.json");
     json rep = json::parse(in, nullptr, false);
     if (rep.is_discarded() || !rep.contains("totals") || rep["status"] != "ok") {
-      fmt::print("| {} | failure | | | | | | | | | | | | |\n", s.name);
+      fmt::print("| {} | failure | | | | | | | | | | | | | | |\n", s.name);
       fmt::print(stderr, "{}: {}\n", s.name, log);
       continue;
     }
     const json& t = rep["totals"];
     auto num = [&](const char* key) { return t.contains(key) && t[key].is_number() ? t[key].get<double>() : NAN; };
-    const auto [all_ms, formed_ms] = frame_medians(out / "metrics.csv", num("time_to_form_s"));
-    fmt::print("| {} | {} | {} | {:.2f} | {:.3f} | {:.2f} | {:.2f} | {:.2f} | {:.4f} | {:.2f} | {:.1f} | {:.1f} | {:.1f} | {:.0f} |\n",
+    // time_to_form_s is null when the shape never stayed formed (≥ 99 % inside, ≤ 0.5 % splash for 1 s).
+    const FrameFigures ff = frame_figures(out / "metrics.csv", num("time_to_form_s"));
+    fmt::print("| {} | {} | {} | {:.2f} | {:.3f} | {:.2f} | {:.2f} | {:.2f} | {:.4f} | {} | {:.2f} | {:.2f} | {:.1f} | {:.1f} "
+               "| {:.1f} | {:.0f} |\n",
                s.name, t["particles"].get<long>(), t["control_particles"].get<long>(), num("controlled_per_control"),
                num("error_rate_pct"), num("error_spacings"), 100 * num("inside_fraction"), 100 * num("splash_fraction"),
-               num("e_fwd_all_m"), num("time_to_form_s"), all_ms, formed_ms, 1e3 / formed_ms, num("peak_memory_mb"));
+               num("e_fwd_all_m"), std::isfinite(num("time_to_form_s")) ? fmt::format("{:.2f}", num("time_to_form_s")) : "not formed",
+               ff.least_inside, ff.most_splash, ff.all_ms, ff.formed_ms, 1e3 / ff.formed_ms, num("peak_memory_mb"));
     std::fflush(stdout);
   }
   if (keep.empty()) fs::remove_all(dir);
