@@ -77,7 +77,7 @@ FrameFigures frame_figures(const fs::path& csv, double formed_s) {
     if (f.size() < head.size() || std::stod(f[static_cast<std::size_t>(c_sub)]) == 0) continue;  // frame 0: not stepped
     const double ms = 1e3 * std::stod(f[static_cast<std::size_t>(c_step)]);
     all.push_back(ms);
-    if (!std::isfinite(formed_s) || std::stod(f[static_cast<std::size_t>(c_time)]) < formed_s - 1e-9) continue;
+    if (!std::isfinite(formed_s) || std::stod(f[static_cast<std::size_t>(c_time)]) < formed_s - 1e-6) continue;  // time_s: 6 decimals
     formed.push_back(ms);
     const double inside = 100 * std::stod(f[static_cast<std::size_t>(c_inside)]);
     const double splash = 100 * std::stod(f[static_cast<std::size_t>(c_splash)]);

@@ -20,13 +20,13 @@ t0 = rep['time_to_form_s']
 if t0 is None:
     print(f"{sys.argv[2]} control particles: not formed in {rows[-1]['time_s']} s")
     sys.exit(0)
-after = [r for r in rows if float(r['time_s']) >= t0 - 1e-9]
+after = [r for r in rows if float(r['time_s']) >= t0 - 1e-6]  # time_s has 6 decimals
 f = lambda r, k: float(r[k])
 fps = round(1 / (f(rows[1], 'time_s') - f(rows[0], 'time_s')))
 e_first = st.mean(f(r, 'error_rate_pct') for r in after[:fps])
 e_last = st.mean(f(r, 'error_rate_pct') for r in after[-fps:])
 print(f"{sys.argv[2]} control particles, {rows[-1]['particles']} fluid: formed at {t0:.2f} s, held to {rows[-1]['time_s']} s "
-      f"({float(rows[-1]['time_s']) / t0:.1f}x the forming time)")
+      f"({float(rows[-1]['time_s']) / max(t0, 1e-9):.1f}x the forming time)")
 print(f"  after forming: least inside {100 * min(f(r, 'inside_fraction') for r in after):.2f} %, "
       f"most splash {100 * max(f(r, 'splash_fraction') for r in after):.2f} %")
 print(f"  E first second {e_first:.4f} %, last second {e_last:.4f} %, drift {e_last - e_first:+.4f} pp")

@@ -28,7 +28,7 @@ struct RunCli {
 // "Formed" as report.json's time_to_form_s counts it (metrics::FormedThresholds), with the thresholds it used.
 std::string time_to_form_text(double t, const metrics::FormedThresholds& th) {
   const std::string when = fmt::format("inside ≥ {:g} %, splash ≤ {:g} %", 100 * th.min_inside, 100 * th.max_splash);
-  if (!std::isfinite(t)) return fmt::format("not formed ({} never held for {:g} s)", when, th.hold_s);
+  if (!std::isfinite(t)) return fmt::format("not formed ({} not reached by the end)", when);
   return fmt::format("{:.2f} s simulated ({} from then on)", t, when);
 }
 

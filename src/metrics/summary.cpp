@@ -65,19 +65,10 @@ SeriesSummary summarize(std::span<const double> values, std::span<const double> 
 double formed_since(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,
                     const FormedThresholds& th) {
   const std::size_t n = std::min({inside.size(), splash.size(), times.size()});
-  // Walk back from the end: `end` is the first frame after the formed run that frame i starts (n: to the end).
-  double first = kNaN;
-  std::size_t end = n;
-  for (std::size_t i = n; i-- > 0;) {
-    if (!is_formed(inside[i], splash[i], th)) {
-      end = i;
-      continue;
-    }
-    // Formed from i up to end: it counts when it reaches the end of the run or lasts th.hold_s (the frame after the
-    // run is where it let go, so the run lasted until then).
-    if (end == n || times[end] - times[i] >= th.hold_s - 1e-9) first = times[i];
-  }
-  return first;
+  // Walk back from the end while the frames are formed.
+  std::size_t first = n;
+  while (first > 0 && is_formed(inside[first - 1], splash[first - 1], th)) --first;
+  return first < n ? times[first] : kNaN;
 }
 
 bool formed_held(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,

@@ -49,13 +49,14 @@ inline bool is_formed(double inside, double splash, const FormedThresholds& th) 
   return inside >= th.min_inside && splash <= th.max_splash;  // false for NaN
 }
 
-/// The first time from which the shape stays formed (`is_formed` at every frame) for th.hold_s, or for the rest of
-/// the run when that is shorter; NaN when there is none (the shape never formed, or let go within th.hold_s each
-/// time). A shape that forms, lets go and forms again counts from the forming that held.
+/// The first time from which the shape stays formed (`is_formed` at every frame) to the end of the run; NaN when the
+/// last frame is not formed. A shape that forms, lets go and forms again counts from the last forming. (th.hold_s is
+/// the stop rule's, formed_held's.)
 double formed_since(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,
                     const FormedThresholds& th = {});
 
-/// Whether the last frames, th.hold_s of them or more, are all formed (the stop rule of a run without --frames).
+/// Whether the frames of the last th.hold_s seconds, from one at least th.hold_s before the last frame, are all
+/// formed (the stop rule of a run without --frames).
 bool formed_held(std::span<const double> inside, std::span<const double> splash, std::span<const double> times,
                  const FormedThresholds& th = {});
 

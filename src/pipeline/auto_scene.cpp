@@ -300,7 +300,7 @@ std::optional<std::string> thin_wall_warning(const scene::Scene& s, std::size_t 
   const double need = t.thickness->thinnest / kAcross;
   const Vec3f& w = t.thickness->where;
   return fmt::format("target {}: walls {:.3g} m thin near ({:.3g}, {:.3g}, {:.3g}) are {:.1f} spacings across (d = {:.3g} m) "
-                     "and may come out with holes: {:g} need d <= {:.3g} m{}",
+                     "and may come out with holes: {:g} spacings need d <= {:.3g} m{}",
                      k, t.thickness->thinnest, w.x(), w.y(), w.z(), t.thickness->thinnest / d, d, kAcross, need,
                      s.auto_radius ? fmt::format(", about {:.3g} control particles (sampling.auto_count)",
                                                  double(s.sampling.auto_count) * std::pow(d / need, 3.0))

@@ -36,7 +36,7 @@ struct CompareRow {
   std::string status;          ///< "ok", "failure (blew up: ...)", "failure (never formed)"
   double particles = NAN, control_particles = NAN, controlled = NAN, controlled_per_control = NAN;
   double error_rate_pct = NAN, error_rate_final_pct = NAN, frame_seconds = NAN, memory_mb = NAN;
-  double splash_pct = NAN, inside_pct = NAN, time_to_form_s = NAN, retention_pp = NAN;
+  double splash_pct = NAN, inside_pct = NAN, time_to_form_s = NAN, time_to_settle_s = NAN, retention_pp = NAN;
   double error_spacings = NAN, e_fwd_all_m = NAN;
   double wall_seconds = NAN;  ///< the child's whole run (sampling, I/O included), for planning benchmark time
 };

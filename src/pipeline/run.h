@@ -40,7 +40,8 @@ struct RunSummary {
   // Shape metrics (METHOD §d), when the scene has targets.
   bool has_targets = false;
   std::size_t control_particles = 0, controlled = 0;
-  /// time_to_form: s from which the shape stayed formed by `formed`'s thresholds; NaN: it never did.
+  /// time_to_form: s from which the shape stayed formed by `formed`'s thresholds to the end; NaN: it was not formed
+  /// at the end.
   double error_rate = 0, inside_fraction = 0, splash_fraction = 0, time_to_form = 0, e_fwd_all = 0, error_spacings = 0;
   metrics::FormedThresholds formed;
   // Meshing (when RunOptions::mesh).

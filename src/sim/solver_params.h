@@ -13,7 +13,7 @@
 namespace ff::sim {
 
 struct SolverParams {
-  /// r, m; spacing d = 2r. (1e-6, 1e4]: wide, because targets come in any unit (a character exported in centimetres
+  /// r, m; spacing d = 2r. (1e-4, 1e4]: wide above, because targets come in any unit (a character exported in centimetres
   /// is hundreds of "metres" tall); what a radius costs is checked against the target (the run's budget).
   float particle_radius = 0.025f;
   float support_factor = 4.0f;     ///< H_p = support_factor · r (METHOD: 4r = 2d). [2.5, 8]
@@ -25,7 +25,7 @@ struct SolverParams {
   float cfl = 0.4f;                ///< largest displacement per sub-step, in spacings d. (0, 1]
   /// Capillary time-step condition (Brackbill et al. 1992; Morris 2000 for SPH): Δt ≤ capillary_cfl ·
   /// √(ρ0 H_p³ / (2π σ_eff)), σ_eff = surface_tension / d_ref² the surface tension as a pressure jump per curvature
-  /// (see surface_tension_ref_spacing). Explicit surface tension is stable only below it, and it shrinks as d^1.5,
+  /// (see kSurfaceTensionRefSpacing). Explicit surface tension is stable only below it, and it shrinks as d^1.5,
   /// faster than the CFL sub-step: without it the 100k bunny, formed, let 3 % of its fluid go once the CFL rule
   /// allowed 3 sub-steps a frame (bench/RESULTS.md, "Detail at scale"). 0 = off. [0, 10]
   float capillary_cfl = 0.4f;
@@ -60,7 +60,7 @@ struct SolverParams {
   template <class S, class F>
   static void fields(S& s, F&& f) {
     using namespace core;
-    f("particle_radius", s.particle_radius, open_closed(1e-6, 1e4, "r, m; spacing d = 2r (default: from the targets)"));
+    f("particle_radius", s.particle_radius, open_closed(1e-4, 1e4, "r, m; spacing d = 2r (default: from the targets)"));
     f("support_factor", s.support_factor, closed(2.5, 8.0, "H_p = support_factor · r"));
     f("iterations", s.iterations, closed(1, 100, "density-constraint iterations per sub-step (minimum)"));
     f("max_iterations", s.max_iterations, closed(1, 1000, "more iterations while the density error is high; ≥ iterations"));

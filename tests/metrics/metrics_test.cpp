@@ -336,9 +336,14 @@ TEST(Summary, FormedSinceNeedsTheShapeToHold) {
     splash.push_back(formed ? 0.003 : 0.02);
     t.push_back(0.1 * f);
   }
-  EXPECT_DOUBLE_EQ(formed_since(inside, splash, t), t[9]);  // not 0.3 s: that forming held 0.4 s
+  EXPECT_DOUBLE_EQ(formed_since(inside, splash, t), t[9]);  // not 0.3 s: that forming let go
   EXPECT_TRUE(formed_held(inside, splash, t));               // frames 14–24: 1 s
-  // The same run cut at frame 16: formed to the end from 0.9 s, held 0.7 s: formed since 0.9 s, not yet held.
+  // A shape that forms and lets go before the end has no time, however long it held.
+  std::vector<double> lost = inside;
+  lost.back() = 0.98;
+  EXPECT_TRUE(std::isnan(formed_since(lost, splash, t)));
+  EXPECT_FALSE(formed_held(lost, splash, t));
+  // The same run cut at frame 16: formed to the end from 0.9 s, for 0.7 s: formed since 0.9 s, not yet held.
   const auto cut = [](const std::vector<double>& v) { return std::span<const double>(v).first(17); };
   EXPECT_DOUBLE_EQ(formed_since(cut(inside), cut(splash), cut(t)), t[9]);
   EXPECT_FALSE(formed_held(cut(inside), cut(splash), cut(t)));

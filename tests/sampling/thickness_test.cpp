@@ -1,4 +1,4 @@
-// The shrinking-ball thickness (sampling/thickness.h) on shapes whose thinnest wall is known.
+// The wall thickness along the inward normal (sampling/thickness.h) on shapes whose thinnest wall is known.
 #include "sampling/thickness.h"
 
 #include "support/shapes.h"

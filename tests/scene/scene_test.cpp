@@ -57,7 +57,7 @@ TEST(Scene, UnknownKeyNamesPathAndClosestKey) {
 
 TEST(Scene, OutOfRangeNamesKeyValueAndRange) {
   EXPECT_EQ(error_of(std::string(R"({"solver":{"particle_radius":-0.1},)") + std::string(kMinimal).substr(1)),
-            "solver.particle_radius = -0.1 is outside (1e-06, 10000]");
+            "solver.particle_radius = -0.1 is outside (0.0001, 10000]");
   EXPECT_EQ(error_of(std::string(R"({"solver":{"cfl":1.7},)") + std::string(kMinimal).substr(1)),
             "solver.cfl = 1.7 is outside (0, 1]");
   EXPECT_EQ(error_of(std::string(R"({"output":{"fps":0},)") + std::string(kMinimal).substr(1)),
