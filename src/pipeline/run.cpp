@@ -99,9 +99,10 @@ bool formed_and_held(const std::vector<FrameRow>& rows, int window, int min_fram
   return hi - lo <= 0.05 + 0.05 * (sum / window);
 }
 
-/// The shape is formed (metrics::FormedThresholds: inside and splash) and has stayed so for the last second: with
-/// formed_and_held's E, the stop rule of a run without --frames.
-bool shape_held(const std::vector<FrameRow>& rows) {
+/// The stop rule of a run without --frames: E has settled over the last `window` frames (formed_and_held) and the
+/// shape is formed (metrics::FormedThresholds: inside and splash) and has stayed so for the last second.
+bool settled_and_formed(const std::vector<FrameRow>& rows, int window) {
+  if (!formed_and_held(rows, window, 2 * window)) return false;
   std::vector<double> inside, splash, times;
   for (const auto& r : rows) inside.push_back(r.inside), splash.push_back(r.splash), times.push_back(r.time);
   return metrics::formed_held(inside, splash, times);
@@ -349,7 +350,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
                   st.target_rows);
     st.rows.push_back(row);
     last_frame = f;
-    const bool done = loop.run_until_formed && formed_and_held(st.rows, window, 2 * window) && shape_held(st.rows);
+    const bool done = loop.run_until_formed && settled_and_formed(st.rows, window);
     if (scene.output.checkpoint_every > 0 && (f % scene.output.checkpoint_every == 0 || f == loop.frames || done)) {
       sim::Checkpoint ck{f + 1, st.time, scene.hash,
                          json{{"rows", metrics::rows_to_json(st.rows)}, {"target_rows", metrics::target_rows_to_json(st.target_rows)}}.dump(),
@@ -361,8 +362,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
     if (done) break;
   }
   progress.end();
-  if (loop.run_until_formed && last_frame == loop.frames &&
-      !(formed_and_held(st.rows, window, 2 * window) && shape_held(st.rows)))
+  if (loop.run_until_formed && last_frame == loop.frames && !settled_and_formed(st.rows, window))
     spdlog::warn("the shape had not formed and settled after {} frames (the cap); pass --frames to run longer", loop.frames);
   return last_frame;
 }

@@ -1,8 +1,7 @@
 #include "sampling/thickness.h"
 
 #include "core/parallel.h"
-
-#include <Eigen/Geometry>
+#include "sampling/samplers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,18 +10,6 @@
 
 namespace ff::sampling {
 namespace {
-
-// Point k of n spread over the surface by area: the k-th share of the cumulative area picks the triangle, the R2
-// sequence (Roberts 2018) the barycentric coordinates inside it.
-Vec3f surface_point(const io::TriangleMesh& mesh, const std::vector<double>& cumulative, std::size_t k, std::size_t n) {
-  const double u = (double(k) + 0.5) / double(n) * cumulative.back();
-  const auto t = static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin());
-  const auto& tri = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
-  double a = std::fmod(0.7548776662466927 * double(k + 1), 1.0), b = std::fmod(0.5698402909980532 * double(k + 1), 1.0);
-  if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
-  const Vec3f& v0 = mesh.vertices[tri[0]];
-  return v0 + float(a) * (mesh.vertices[tri[1]] - v0) + float(b) * (mesh.vertices[tri[2]] - v0);
-}
 
 // The distance from s along −n (n outward) to where the ray leaves the shape, sphere-traced from `start` below s,
 // and the outward normal where it leaves; depth < 0 when it does not land within the step cap (a ray along a
@@ -45,25 +32,17 @@ Landing wall_along_normal(const MeshField& field, const Vec3f& s, const Vec3f& n
 
 std::optional<Thickness> measure_thickness(const MeshField& field, const io::TriangleMesh& mesh,
                                            const ThicknessParams& params) {
-  if (mesh.triangles.empty() || params.points == 0) return std::nullopt;
-  std::vector<double> cumulative(mesh.triangles.size());
-  double area = 0.0;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const auto& tri = mesh.triangles[t];
-    const Vec3f& v0 = mesh.vertices[tri[0]];
-    area += 0.5 * double((mesh.vertices[tri[1]] - v0).cross(mesh.vertices[tri[2]] - v0).norm());
-    cumulative[t] = area;
-  }
-  if (!(area > 0.0)) return std::nullopt;
+  // Points spread over the surface by area, the same on every run (the samplers' generator, a fixed seed).
+  const std::vector<Vec3f> points = random_surface_points(mesh, params.points, 0x7417C4E55ull);
+  if (points.empty()) return std::nullopt;  // no triangles, or no area
   const float diagonal = mesh.bounds().size().norm();
   const float start = 1e-4f * diagonal;  // below the surface: where the ray starts, and the landing tolerance
-  const std::size_t n = params.points;
+  const std::size_t n = points.size();
   std::vector<float> wall(n, -1.0f);
   std::vector<Vec3f> at(n);
   core::parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t kk) {
     const auto k = static_cast<std::size_t>(kk);
-    const Vec3f p = surface_point(mesh, cumulative, k, n);
-    const MeshField::Closest c = field.closest(p);  // the outward normal there (after the field's orientation)
+    const MeshField::Closest c = field.closest(points[k]);  // the outward normal there (after the field's orientation)
     at[k] = c.point;
     // A wall has a far side facing back; a ray that leaves through a neighbouring face of a wedge (a tetrahedron's
     // edge, a cone's tip) measures how near the edge it started, and counts as no wall (thick).

@@ -11,7 +11,7 @@
 // surface, which doubles the depth while s's own side is nearest and lands on the far side when it comes near, so a
 // ray takes ~log2(thickness / start) + a few queries.
 //
-// The points are spread over the surface by area (a low-discrepancy sequence, so the result is deterministic), and
+// The points are spread over the surface by area (random_surface_points with a fixed seed: deterministic), and
 // the thinnest part is a low percentile of their thicknesses: a few slivers do not decide it, a thin wall does.
 #include "io/triangle_mesh.h"
 #include "sampling/mesh_field.h"
