@@ -3,6 +3,7 @@
 #include "io/skin.h"
 
 #include "io/load_mesh.h"
+#include "pipeline/run_budget.h"
 #include "sampling/mesh_field.h"
 #include "sampling/samplers.h"
 #include "pose/target_motion.h"
@@ -122,14 +123,52 @@ Error too_many_samples(const scene::Scene& s, std::size_t k, float dc, double co
                                  k, dc, count, s.sampling.max_samples));
 }
 
+// The count the memory limit allows: each particle costs about one fluid particle and one control sample
+// (run_budget.h's model; the SDF grids are left to check_run_budget, which still refuses a run over the limit).
+double count_memory_allows(const scene::Scene& s) {
+  const double limit = memory_limit_mib(s, std::nullopt);
+  return std::max(0.0, (limit - kBaseMib) * 1024.0 / (kFluidKib + kSampleKib));
+}
+
 // The particle radius from the targets' volume (or area): d³ per sample (the blue-noise count is V/d³); an open
-// sheet is sampled by its area instead.
-Status size_particles(scene::Scene& s, double volume, double area) {
+// sheet is sampled by its area instead. When the scene left the count automatic (auto_resolution), the count
+// rises from auto_count until the thinnest wall of any target is kWallSpacings spacings across, up to
+// max_auto_count and what the memory limit allows (scene.sizing records which). A thick shape keeps auto_count.
+Status size_particles(scene::Scene& s, const std::vector<TargetGeometry>& targets, double volume, double area) {
   const double n = static_cast<double>(s.sampling.auto_count);
-  const double d = volume > 0.0 ? std::cbrt(volume / n) : std::sqrt(area / n);
-  if (!(d > 0.0) || !std::isfinite(d)) return input_error("the targets have no volume and no area to size the particles by");
+  const double d_volume = volume > 0.0 ? std::cbrt(volume / n) : std::sqrt(area / n);
+  if (!(d_volume > 0.0) || !std::isfinite(d_volume))
+    return input_error("the targets have no volume and no area to size the particles by");
+  scene::AutoSizing& z = s.sizing;
+  z = scene::AutoSizing{};
+  z.count_for_volume = z.count = n;
+  for (std::size_t k = 0; k < targets.size(); ++k)
+    if (const auto& th = targets[k].thickness; th && (z.target < 0 || th->thinnest < z.wall))
+      z.target = static_cast<int>(k), z.wall = th->thinnest;
+  double d = d_volume;
+  if (z.target >= 0 && volume > 0.0 && z.wall < kWallSpacings * d_volume) {
+    // The count goes as 1/d³: the spacing a wall needs, as a count.
+    z.count_for_walls = n * std::pow(kWallSpacings * d_volume / z.wall, 3.0);
+    // A skinned target keeps auto_count: the walking demo character at the ~21.7k its limbs ask for held 95.6 %
+    // inside at its worst frame (3.0 % splash) where 10k holds ≥ 98 % (issue 44, bench/RESULTS.md), so a count
+    // raised for its walls would cost it its shape.
+    const bool skinned = std::any_of(targets.begin(), targets.end(), [](const TargetGeometry& t) { return bool(t.skin); });
+    if (skinned && s.auto_resolution) z.limited_by = "skinned";
+    if (s.auto_resolution && !skinned) {
+      const double budget = std::max(n, double(s.sampling.max_auto_count)), memory = std::max(n, count_memory_allows(s));
+      z.count = std::min({z.count_for_walls, budget, memory});
+      if (z.count < z.count_for_walls) z.limited_by = budget <= memory ? "sampling.max_auto_count" : "memory";
+      d = d_volume * std::cbrt(n / z.count);
+    }
+  }
   s.solver.particle_radius = static_cast<float>(0.5 * d);
   FF_CHECK(s.solver.validate());
+  if (z.count > n) {
+    const auto& w = targets[static_cast<std::size_t>(z.target)].thickness->where;
+    spdlog::info("target {}: walls {:.3g} m thin near ({:.3g}, {:.3g}, {:.3g}): about {:.3g} particles put {:.1f} spacings "
+                 "across them (sampling.auto_count {} would put {:.1f})",
+                 z.target, z.wall, w.x(), w.y(), w.z(), z.count, z.wall / d, s.sampling.auto_count, z.wall / d_volume);
+  }
   return {};
 }
 
@@ -272,8 +311,8 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   double volume = 0.0, area = 0.0;
   for (const auto& t : targets) volume += t.volume, area += t.area;
   suggest_unit_scale(targets);
-  if (s.auto_radius) FF_CHECK(size_particles(s, volume, area));
   measure_walls(targets);
+  if (s.auto_radius) FF_CHECK(size_particles(s, targets, volume, area));
   const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
   if (s.fluid.empty()) {
     // The fluid matches the volume the control samples will stand for: the voxel count of the solid at the
@@ -294,17 +333,26 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
 }
 
 std::optional<std::string> thin_wall_warning(const scene::Scene& s, std::size_t k, const TargetGeometry& t) {
-  constexpr double kAcross = 3.0;
   const double d = s.sampling.spacing > 0.0f ? s.sampling.spacing : s.solver.spacing();
-  if (!t.thickness || t.thickness->thinnest >= kAcross * d) return std::nullopt;
-  const double need = t.thickness->thinnest / kAcross;
+  // A hair under 3 spacings is the automatic count's own rounding (its spacing is a float radius): not a warning.
+  if (!t.thickness || t.thickness->thinnest >= (kWallSpacings - 1e-3) * d) return std::nullopt;
+  const double need = t.thickness->thinnest / kWallSpacings;
   const Vec3f& w = t.thickness->where;
+  // What count would resolve it, and what to change: the count's budget when that held it back.
+  const double count = s.sizing.count > 0.0 ? s.sizing.count : double(s.sampling.auto_count);
+  const std::string knob =
+      !s.auto_radius                    ? std::string(" (solver.particle_radius)")
+      : s.sizing.limited_by == "skinned"
+          ? fmt::format(", about {:.3g} particles (sampling.auto_count: a scene with a skinned target "
+                        "keeps it unless the scene names a count)", count * std::pow(d / need, 3.0))
+      : s.sizing.limited_by == "memory" ? fmt::format(", about {:.3g} particles, more than the memory limit allows "
+                                                      "(limits.max_memory_mb)", count * std::pow(d / need, 3.0))
+      : s.auto_resolution               ? fmt::format(", about {:.3g} particles, over the budget of {} (sampling.max_auto_count)",
+                                                      count * std::pow(d / need, 3.0), s.sampling.max_auto_count)
+                                        : fmt::format(", about {:.3g} particles (sampling.auto_count)", count * std::pow(d / need, 3.0));
   return fmt::format("target {}: walls {:.3g} m thin near ({:.3g}, {:.3g}, {:.3g}) are {:.1f} spacings across (d = {:.3g} m) "
                      "and may come out with holes: {:g} spacings need d <= {:.3g} m{}",
-                     k, t.thickness->thinnest, w.x(), w.y(), w.z(), t.thickness->thinnest / d, d, kAcross, need,
-                     s.auto_radius ? fmt::format(", about {:.3g} control particles (sampling.auto_count)",
-                                                 double(s.sampling.auto_count) * std::pow(d / need, 3.0))
-                                   : std::string(" (solver.particle_radius)"));
+                     k, t.thickness->thinnest, w.x(), w.y(), w.z(), t.thickness->thinnest / d, d, kWallSpacings, need, knob);
 }
 
 void assign_targets(sim::ParticleSet& p, const std::vector<TargetGeometry>& targets) {

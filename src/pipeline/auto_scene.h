@@ -1,7 +1,8 @@
 #pragma once
 // Completes a scene that names only its targets (docs/scenes.md: the smallest scene is {"targets":[{"mesh":...}]}):
 //   particle spacing  d = ∛(V / auto_count): the targets hold ~auto_count (10k) control samples and the fluid
-//                     as many particles (METHOD §0: d_c = d);
+//                     as many particles (METHOD §0: d_c = d); when the scene names no count, more where a target's
+//                     thinnest wall would be under kWallSpacings spacings across (up to sampling.max_auto_count);
 //   fluid             one column per target, of the target's volume, standing on top of the target so it
 //                     pours down through the target's control band (METHOD §a.10: control only reaches H_c);
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
@@ -21,6 +22,10 @@
 #include <vector>
 
 namespace ff::pipeline {
+
+/// Spacings across a target's thinnest wall that the automatic count aims at, and under which a wall is named
+/// (issue 44: fewer come out of the simulation and the surface reconstruction with holes).
+inline constexpr double kWallSpacings = 3.0;
 
 /// A target mesh in its scene pose, with what the layout needs.
 struct TargetGeometry {

@@ -26,6 +26,9 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   FF_CHECK(s->scene_.controller.validate());
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
   FF_TRY(s->geometry_, load_target_meshes(s->scene_));
+  // A live preview keeps sampling.auto_count (10k: display rate on two cores) where `run` would raise it for thin
+  // walls (~40k for the bunny, ~3 frames a second): the thin-wall line still says what would resolve them.
+  s->scene_.auto_resolution = false;
   FF_CHECK(complete_scene(s->scene_, s->geometry_));
   // The memory it will need, checked (as `run` does) before the fluid, the samples or any grid is allocated.
   FF_TRY(const RunEstimate estimate, check_run_budget(s->scene_, s->geometry_, options.max_memory_mib));

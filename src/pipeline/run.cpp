@@ -288,6 +288,14 @@ Status write_report(const fs::path& out, const RunFacts& facts, const RunState& 
   rep["targets"] = facts.targets;
   rep["totals"] = run_totals(facts, st);
   rep["estimate"] = facts.estimate.to_json();
+  if (const scene::AutoSizing& z = facts.scene.sizing; z.count > 0.0) {  // how the automatic count was chosen
+    rep["sizing"] = {{"count_for_volume", z.count_for_volume}, {"count", std::round(z.count)},
+                     {"count_for_walls", z.count_for_walls > 0.0 ? json(std::round(z.count_for_walls)) : json(nullptr)},
+                     {"wall_spacings_aimed", kWallSpacings},
+                     {"limited_by", z.limited_by.empty() ? json(nullptr) : json(z.limited_by)},
+                     {"thinnest_wall_m", z.target >= 0 ? json(z.wall) : json(nullptr)},
+                     {"thinnest_wall_target", z.target >= 0 ? json(z.target) : json(nullptr)}};
+  }
   if (st.first_frame_seconds > 0.0) rep["estimate"]["seconds_per_frame"] = st.first_frame_seconds;
   FF_CHECK(io::write_file_atomic(out / "metrics.csv", metrics::metrics_csv(st.rows)));
   if (!facts.shapes.empty())

@@ -51,6 +51,9 @@ struct SamplingParams {
   Method method = Method::BlueNoise;
   float spacing = 0.0f;            ///< d_c, m; 0 = automatic: about `auto_count` samples in the target. [0, 1e3]
   std::size_t auto_count = 10'000; ///< samples aimed at when spacing is automatic. [100, 1e8]
+  /// The most samples the automatic count rises to so that a target's thinnest walls are 3 spacings across, when
+  /// neither auto_count nor a spacing is given (pipeline/auto_scene.h): ~1 s a frame on two cores. [100, 1e8]
+  std::size_t max_auto_count = 100'000;
   std::uint64_t seed = 1;          ///< random seed (results are deterministic for a seed)
   int relax_steps = 100;           ///< SPH relaxation steps of the blue-noise sampler. [0, 10000]
   /// H_c = support_factor · d_c. [1.5, 8] METHOD §0 proposes 4d and §a.10 asks for 3d to be measured: on the
@@ -69,6 +72,8 @@ struct SamplingParams {
     f("method", s.method, plain("how targets become control particles"));
     f("spacing", s.spacing, closed(0.0, 1e3, "d_c, m; 0 = the fluid spacing d"));
     f("auto_count", s.auto_count, closed(100, 1e8, "control samples aimed at when the particle radius is automatic"));
+    f("max_auto_count", s.max_auto_count,
+      closed(100, 1e8, "the most the automatic count rises to for thin walls (auto_count not given)"));
     f("seed", s.seed, plain("random seed (results are deterministic for a seed)"));
     f("relax_steps", s.relax_steps, closed(0, 10000, "SPH relaxation steps of the blue-noise sampler"));
     f("support_factor", s.support_factor, closed(1.5, 8.0, "H_c = support_factor · d_c"));

@@ -96,6 +96,7 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   s.auto_domain = !given("domain", nullptr);
   s.auto_frames = !given("output", "frames");
   s.auto_fluid = s.fluid.empty() && !s.targets.empty();
+  s.auto_resolution = !given("sampling", "auto_count") && !given("sampling", "spacing");
   FF_CHECK(s.validate());
   // The resume hash covers everything that shapes the simulation; the frame count, the limits and the targets'
   // tints may change between runs.

@@ -116,6 +116,18 @@ struct LimitsParams {
   Status validate(std::string_view path = "limits") const { return core::validate_fields(*this, path); }
 };
 
+/// How the automatic particle count was chosen (pipeline::complete_scene): for report.json and the summary.
+struct AutoSizing {
+  double count_for_volume = 0.0;  ///< sampling.auto_count: the count for a solid without thin parts
+  double count_for_walls = 0.0;   ///< the count that puts 3 spacings across the thinnest wall (0: none thinner)
+  double count = 0.0;             ///< the count the spacing was chosen for
+  /// "" or what held the count back: "sampling.max_auto_count", "memory", or "skinned" (a scene with a skinned
+  /// target keeps auto_count: its liquid follows fast limbs worse at higher counts)
+  std::string limited_by;
+  int target = -1;                ///< the target with the thinnest wall (-1: none measured)
+  double wall = 0.0;              ///< its thickness, m
+};
+
 struct Scene {
   std::filesystem::path file;        ///< the scene file ("" when built in code)
   sim::SolverParams solver;
@@ -130,6 +142,10 @@ struct Scene {
   bool auto_domain = true;            ///< domain was not given
   bool auto_frames = true;            ///< output.frames was not given: with targets, run until formed (within a cap)
   bool auto_fluid = false;            ///< targets and no fluid list: the fluid is made from the targets
+  /// The scene file gave neither sampling.auto_count nor sampling.spacing: the automatic count may rise for thin
+  /// walls. False for a scene built in code (its count is what the code set).
+  bool auto_resolution = false;
+  AutoSizing sizing;                  ///< filled by complete_scene when the radius is automatic
   std::uint64_t hash = 0;            ///< content hash of the simulation-relevant settings (for --resume)
 
   /// The scene file's top-level keys, each a struct with its own field list.

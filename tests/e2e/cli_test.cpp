@@ -452,7 +452,7 @@ TEST(Cli, ThinWallsAreMeasuredAndNamed) {
   for (std::size_t at = 0; (at = r.err.find("may come out with holes", at)) != std::string::npos; ++at) ++lines;
   EXPECT_EQ(lines, 1u) << r.err;
   EXPECT_NE(r.err.find("target 0: walls 0.0"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("control particles (sampling.auto_count)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("particles (sampling.auto_count)"), std::string::npos) << r.err;
   const auto rep = nlohmann::json::parse(read_file(dir / "out" / "report.json"));
   const auto& wall = rep["targets"][0]["thinnest_wall"];
   EXPECT_NEAR(wall["m"].get<double>(), 0.02, 0.002) << wall.dump();

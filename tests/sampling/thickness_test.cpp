@@ -1,9 +1,14 @@
 // The wall thickness along the inward normal (sampling/thickness.h) on shapes whose thinnest wall is known.
 #include "sampling/thickness.h"
 
+#include "io/load_mesh.h"
+
 #include "support/shapes.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
 
 namespace ff::sampling {
 namespace {
@@ -67,6 +72,45 @@ TEST(Thickness, AWedgeIsNoWall) {
   auto right_field = MeshField::build(right);
   ASSERT_TRUE(right_field.has_value());
   EXPECT_FALSE(measure_thickness(*right_field, right).has_value());
+}
+
+// The hard-target families of bench_scenes (issue 44): each shape closed, outward, of the volume its definition
+// gives, and its thinnest part read as its wall, its pipe wall, or its gear's disc.
+TEST(Thickness, TheHardFamiliesAreClosedAndTheirWallsRead) {
+  const float wall = 0.037f;
+  const io::TriangleMesh bin = test::open_box(Vec3f(0.5f, 0.35f, 0.4f), wall);
+  auto bin_field = MeshField::build(bin);
+  ASSERT_TRUE(bin_field.has_value());
+  EXPECT_TRUE(bin_field->inside(Vec3f(0.5f - 0.5f * wall, 0.0f, 0.0f))) << "in a wall";
+  EXPECT_TRUE(bin_field->inside(Vec3f(0.0f, -0.35f + 0.5f * wall, 0.0f))) << "in the floor";
+  EXPECT_FALSE(bin_field->inside(Vec3f(0.0f, 0.0f, 0.0f))) << "in the bin";
+  // volume() sums its parts (overlaps twice): the floor, two walls across x and two across z.
+  const double slabs = 1.0 * 0.8 * wall + 2.0 * (wall * 0.7 * 0.8) + 2.0 * (1.0 * 0.7 * wall);
+  EXPECT_NEAR(bin_field->volume(), slabs, 1e-3 * slabs);
+  EXPECT_NEAR(measure(bin).thinnest, wall, 0.1f * wall);
+
+  const float r = 0.3f, w = 0.025f;
+  const io::TriangleMesh pipe = test::pipe(r, w, 1.0f, 64);
+  const double polygon = 0.5 * 64 * std::sin(2.0 * std::numbers::pi / 64);  // area of the 64-gon of radius 1
+  EXPECT_NEAR(io::signed_volume(pipe), polygon * (r * r - (r - w) * (r - w)), 1e-4);
+  EXPECT_NEAR(measure(pipe).thinnest, w, 0.1f * w);
+
+  const io::TriangleMesh gear = test::gear(24, 0.4f, 0.5f, 0.03f);
+  EXPECT_GT(io::signed_volume(gear), std::numbers::pi * 0.4 * 0.4 * 0.03);
+  EXPECT_LT(io::signed_volume(gear), std::numbers::pi * 0.5 * 0.5 * 0.03);
+  // Its teeth are thinner than the disc: an eighth of the pitch at the tip (1.6 cm), a quarter at the root (2.6 cm).
+  const float tooth = measure(gear).thinnest;
+  EXPECT_GT(tooth, 0.015f);
+  EXPECT_LT(tooth, 0.027f);
+
+  const io::TriangleMesh parts = test::overlapping_parts();
+  auto field = MeshField::build(parts);
+  ASSERT_TRUE(field.has_value());
+  EXPECT_TRUE(field->encloses_volume());
+  EXPECT_TRUE(field->inside(Vec3f(0.22f, 0.45f, 0.0f))) << "in the ball, above the box";
+  EXPECT_TRUE(field->inside(Vec3f(0.0f, 0.45f, -0.3f))) << "in the gear, above the box";
+  EXPECT_TRUE(field->inside(Vec3f(0.0f, 0.33f, 0.0f))) << "in the torus's tube, above the box";
+  EXPECT_FALSE(field->inside(Vec3f(-0.2f, 0.33f, 0.0f))) << "in the torus's hole, above the box";
 }
 
 }  // namespace

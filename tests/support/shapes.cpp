@@ -228,6 +228,80 @@ io::TriangleMesh tube_lattice() {
   return m;
 }
 
+io::TriangleMesh open_box(const Vec3f& half, float wall) {
+  const float w = 0.5f * wall;
+  io::TriangleMesh m = translate(box(Vec3f(half.x(), w, half.z()), 8), Vec3f(0.0f, -half.y() + w, 0.0f));  // floor
+  for (const float sx : {-1.0f, 1.0f}) {
+    m = merge(m, translate(box(Vec3f(w, half.y(), half.z()), 8), Vec3f(sx * (half.x() - w), 0.0f, 0.0f)));
+    m = merge(m, translate(box(Vec3f(half.x(), half.y(), w), 8), Vec3f(0.0f, 0.0f, sx * (half.z() - w))));
+  }
+  return m;
+}
+
+io::TriangleMesh pipe(float radius, float wall, float height, int segments) {
+  // Four rings: outer bottom/top, inner bottom/top. Along the angle a (x = cos a, z = sin a) the tangent t, with the
+  // radial r and up u: u × t = r, t × r = u, which fixes each face's winding.
+  io::TriangleMesh m;
+  const float inner = radius - wall;
+  for (const float rho : {radius, inner})
+    for (const float y : {0.0f, height})
+      for (int s = 0; s < segments; ++s) {
+        const double a = 2.0 * std::numbers::pi * s / segments;
+        m.vertices.push_back(Vec3f(rho * float(std::cos(a)), y, rho * float(std::sin(a))));
+      }
+  const auto at = [&](int ring, int s) { return static_cast<Index>(ring * segments + (s % segments)); };
+  constexpr int ob = 0, ot = 1, ib = 2, it = 3;
+  for (int s = 0; s < segments; ++s) {
+    m.triangles.push_back({at(ob, s), at(ot, s), at(ot, s + 1)});  // outer wall, facing r
+    m.triangles.push_back({at(ob, s), at(ot, s + 1), at(ob, s + 1)});
+    m.triangles.push_back({at(ib, s), at(it, s + 1), at(it, s)});  // inner wall, facing −r
+    m.triangles.push_back({at(ib, s), at(ib, s + 1), at(it, s + 1)});
+    m.triangles.push_back({at(it, s), at(it, s + 1), at(ot, s)});  // top rim, facing u
+    m.triangles.push_back({at(it, s + 1), at(ot, s + 1), at(ot, s)});
+    m.triangles.push_back({at(ib, s), at(ob, s), at(ib, s + 1)});  // bottom rim, facing −u
+    m.triangles.push_back({at(ib, s + 1), at(ob, s), at(ob, s + 1)});
+  }
+  return m;
+}
+
+io::TriangleMesh gear(int teeth, float root, float tip, float thickness) {
+  // The profile: per tooth a root gap, the tooth's flank up, its tip, the flank down (8 points a tooth), in order of
+  // angle; a tooth spans a quarter of the pitch at its root and an eighth at its tip.
+  std::vector<std::pair<double, float>> profile;
+  const double pitch = 2.0 * std::numbers::pi / teeth;
+  for (int k = 0; k < teeth; ++k) {
+    const double a0 = pitch * k;
+    for (const auto& [f, r] : {std::pair{0.0, root}, std::pair{0.125, root}, std::pair{0.25, root}, std::pair{0.3125, tip},
+                               std::pair{0.4375, tip}, std::pair{0.5, root}, std::pair{0.75, root}, std::pair{0.875, root}})
+      profile.emplace_back(a0 + f * pitch, r);
+  }
+  io::TriangleMesh m;
+  const auto n = static_cast<Index>(profile.size());
+  for (const float y : {-0.5f * thickness, 0.5f * thickness})
+    for (const auto& [a, r] : profile) m.vertices.push_back(Vec3f(r * float(std::cos(a)), y, r * float(std::sin(a))));
+  const Index cb = 2 * n, ct = 2 * n + 1;
+  m.vertices.push_back(Vec3f(0.0f, -0.5f * thickness, 0.0f));
+  m.vertices.push_back(Vec3f(0.0f, 0.5f * thickness, 0.0f));
+  for (Index i = 0; i < n; ++i) {
+    const Index j = (i + 1) % n;
+    m.triangles.push_back({ct, n + j, n + i});  // top, facing u (t × r = u)
+    m.triangles.push_back({cb, i, j});          // bottom, facing −u
+    m.triangles.push_back({i, n + i, n + j});   // side: u × (edge along increasing angle) faces out
+    m.triangles.push_back({i, n + j, j});
+  }
+  return m;
+}
+
+io::TriangleMesh overlapping_parts() {
+  io::TriangleMesh m = translate(box(Vec3f(0.4f, 0.15f, 0.3f), 4), Vec3f(0.0f, 0.15f, 0.0f));
+  m = merge(m, translate(uv_sphere(0.2f, 32), Vec3f(0.22f, 0.3f, 0.0f)));
+  m = merge(m, translate(torus(0.2f, 0.06f, 48, 16), Vec3f(-0.2f, 0.3f, 0.0f)));
+  // The gear stands upright (its axis along z) across the box's back edge.
+  io::TriangleMesh g = gear(12, 0.16f, 0.21f, 0.06f);
+  for (auto& v : g.vertices) v = Vec3f(v.x(), v.z(), -v.y()) + Vec3f(0.0f, 0.3f, -0.3f);
+  return merge(m, g);
+}
+
 io::TriangleMesh flip(io::TriangleMesh mesh) {
   for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   return mesh;

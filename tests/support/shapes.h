@@ -33,6 +33,22 @@ io::TriangleMesh star_figure();
 /// (carbon-tube-like), base at y = 0. Tubes overlap at their crossings.
 io::TriangleMesh tube_lattice();
 
+/// The hard-target families (issue 44): parts a few particles thick, as CAD models have them.
+/// An open-top box (a bin, a tray): outer half extents `half`, centred at the origin, a floor and four walls `wall`
+/// thick, five overlapping slabs as CAD exports them (the winding number makes them one solid). Its thinnest walls
+/// are `wall`. (A box with a closed cavity would not do: MeshField turns an inward-wound shell outward, as it does
+/// for the flipped parts of real files, and fills the cavity.)
+io::TriangleMesh open_box(const Vec3f& half, float wall);
+/// A pipe along y from 0 to `height`: outer radius `radius`, walls `wall` thick, open at both ends (flat annular
+/// rims), `segments` around.
+io::TriangleMesh pipe(float radius, float wall, float height, int segments = 64);
+/// A spur-gear-like disc centred at the origin, `thickness` along y: `teeth` trapezoid teeth from radius `root` to
+/// `tip` (a quarter of the pitch wide at the root, an eighth at the tip), the profile fanned from the axis.
+io::TriangleMesh gear(int teeth, float root, float tip, float thickness);
+/// Several closed parts overlapping in one mesh, as CAD exports an assembly: a box (base at y = 0), a ball half sunk
+/// into it, a torus lying through its top and a gear standing across it. About 0.9 m wide.
+io::TriangleMesh overlapping_parts();
+
 /// Every triangle wound the other way.
 io::TriangleMesh flip(io::TriangleMesh mesh);
 /// Both meshes in one (b's indices shifted; no welding).
