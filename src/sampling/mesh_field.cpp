@@ -183,21 +183,95 @@ std::vector<Index> components_of(const std::vector<Tri>& tris, std::size_t verte
   return comp;
 }
 
+// Does the ray o + s·d (s > 0) meet any triangle? Möller–Trumbore in double, every triangle (no BVH yet).
+bool ray_blocked(const io::TriangleMesh& mesh, const std::vector<Tri>& tris, const Vec3d& o, const Vec3d& d) {
+  for (const Tri& t : tris) {
+    const Vec3d a = to_d(mesh.vertices[t[0]]), e1 = to_d(mesh.vertices[t[1]]) - a, e2 = to_d(mesh.vertices[t[2]]) - a;
+    const Vec3d q = d.cross(e2);
+    const double det = e1.dot(q);
+    if (std::abs(det) < 1e-300) continue;
+    const Vec3d r = o - a;
+    const double u = r.dot(q) / det;
+    if (u < 0.0 || u > 1.0) continue;
+    const Vec3d w = r.cross(e1);
+    const double v = d.dot(w) / det;
+    if (v < 0.0 || u + v > 1.0) continue;
+    if (e2.dot(w) / det > 0.0) return true;
+  }
+  return false;
+}
+
+// Which side of open patch p faces out, by what can be seen from it (Takayama et al., "Simple and robust
+// consistent orientation of facets", 2014, in short): rays from the centres of 8 of its triangles, over the
+// hemisphere on each side, that leave the mesh without meeting a triangle. +1: the side its normals point to
+// sees out more; −1: the other; 0: no clear answer (both sides or neither see out), left to the volume rule.
+int visible_side(const io::TriangleMesh& mesh, const std::vector<Tri>& tris, const std::vector<Index>& patch, Index p,
+                 double offset) {
+  std::vector<std::size_t> members;
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    if (patch[t] == p && cross_d(mesh, tris[t]).squaredNorm() > 0.0) members.push_back(t);
+  constexpr std::size_t kPoints = 8;  // spread over the patch: evenly spaced in its triangle order
+  constexpr int kDirections = 48;
+  int front = 0, back = 0;
+  for (std::size_t k = 0; k < std::min(kPoints, members.size()); ++k) {
+    const Tri& t = tris[members[k * members.size() / std::min(kPoints, members.size())]];
+    const Vec3d n = cross_d(mesh, t).normalized();
+    const Vec3d c = (to_d(mesh.vertices[t[0]]) + to_d(mesh.vertices[t[1]]) + to_d(mesh.vertices[t[2]])) / 3.0;
+    for (int i = 0; i < kDirections; ++i) {  // a Fibonacci sphere: every direction once, fixed
+      const double z = 1.0 - (2.0 * i + 1.0) / kDirections, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const double phi = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
+      const Vec3d d(r * std::cos(phi), r * std::sin(phi), z);
+      const double along = d.dot(n);
+      if (std::abs(along) < 0.1) continue;  // grazing the patch itself
+      const Vec3d o = c + (along > 0.0 ? offset : -offset) * n;
+      if (!ray_blocked(mesh, tris, o, d)) ++(along > 0.0 ? front : back);
+    }
+  }
+  if (front > 2 * back + 2) return 1;
+  if (back > 2 * front + 2) return -1;
+  return 0;
+}
+
 // Flips every patch whose signed volume, taken about its component's box centre, is negative: for closed
 // patches the origin does not matter; for open ones (a cap, a sphere with a hole) the centre of the component
-// is the natural "inside". Returns Σ of the (now positive) volumes.
+// is the natural "inside". Except where that centre lies in a concave part of a component of several open
+// patches: the inner face of a bin whose parts were welded where they touch (a loader welds coincident vertices;
+// the edges where three or four faces then meet split the parts into open patches) faces the centre and was
+// flipped, which filled the bottom of the bin.
+// An open patch the volume rule would flip, in a component of several patches, is flipped only if what it sees
+// agrees (visible_side) or says nothing. Returns Σ of the (now positive) volumes.
 double orient_by_volume(const io::TriangleMesh& mesh, std::vector<Tri>& tris, const std::vector<Index>& patch,
                         const std::vector<Index>& comp, std::size_t components, std::size_t& flipped) {
   std::vector<Aabb> box(components);
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (const Index v : tris[t]) box[comp[t]].extend(mesh.vertices[v]);
   const Index patches = tris.empty() ? 0 : *std::max_element(patch.begin(), patch.end()) + 1;
-  std::vector<double> volume(patches, 0.0);
+  std::vector<double> volume(patches, 0.0), area(patches, 0.0);
+  std::vector<Vec3d> vector_area(patches, Vec3d::Zero());  // ½ Σ n·A: zero for a closed patch
+  std::vector<Index> comp_of(patches, kInvalidIndex);
+  std::vector<std::size_t> patches_in(components, 0);
   for (std::size_t t = 0; t < tris.size(); ++t) {
     const Vec3d o = (0.5 * (to_d(box[comp[t]].min) + to_d(box[comp[t]].max))).eval();
     const Vec3d a = to_d(mesh.vertices[tris[t][0]]) - o, b = to_d(mesh.vertices[tris[t][1]]) - o,
                 c = to_d(mesh.vertices[tris[t][2]]) - o;
     volume[patch[t]] += a.dot(b.cross(c)) / 6.0;
+    const Vec3d n = cross_d(mesh, tris[t]);
+    vector_area[patch[t]] += 0.5 * n, area[patch[t]] += 0.5 * n.norm();
+    if (comp_of[patch[t]] == kInvalidIndex) comp_of[patch[t]] = comp[t], ++patches_in[comp[t]];
+  }
+  // The visibility check costs ~350 rays × every triangle per patch: done for at most ~4e8 ray-triangle tests.
+  std::vector<Index> doubtful;
+  for (Index p = 0; p < patches; ++p)
+    if (volume[p] < 0.0 && patches_in[comp_of[p]] > 1 && vector_area[p].norm() > 1e-6 * area[p]) doubtful.push_back(p);
+  if (!doubtful.empty() && double(doubtful.size()) * 350.0 * double(tris.size()) <= 4e8) {
+    const double offset = 1e-5 * box[comp_of[doubtful[0]]].size().norm();
+    std::vector<int> side(doubtful.size(), 0);
+    core::parallel_for(static_cast<std::int64_t>(doubtful.size()), [&](std::int64_t i) {
+      const auto k = static_cast<std::size_t>(i);
+      side[k] = visible_side(mesh, tris, patch, doubtful[k], offset);
+    });
+    for (std::size_t k = 0; k < doubtful.size(); ++k)
+      if (side[k] > 0) volume[doubtful[k]] = -volume[doubtful[k]];  // it faces out as it is: keep it
   }
   for (std::size_t t = 0; t < tris.size(); ++t)
     if (volume[patch[t]] < 0.0) std::swap(tris[t][1], tris[t][2]);
