@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
   test::write_obj(dir / "vase.obj", test::vase(1.0f, 0.35f, 0.06f));
   test::write_obj(dir / "torus.obj", test::torus(0.4f, 0.12f, 64, 24));
   test::write_obj(dir / "lattice.obj", test::tube_lattice());
-  // The hard family's walls are 1.5 spacings at 10k particles (the count their volume gives), as the issue asks.
+  // The hard family's walls are ~1.5 spacings at 10k particles (the count their volume gives), as the issue asks.
   test::write_obj(dir / "thin-box.obj", test::open_box(Vec3f(0.5f, 0.35f, 0.4f), 0.037f));
   test::write_obj(dir / "pipe.obj", test::pipe(0.3f, 0.025f, 1.0f));
   test::write_obj(dir / "gear.obj", test::gear(24, 0.4f, 0.5f, 0.03f));

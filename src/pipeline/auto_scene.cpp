@@ -124,10 +124,11 @@ Error too_many_samples(const scene::Scene& s, std::size_t k, float dc, double co
 }
 
 // The count the memory limit allows: each particle costs about one fluid particle and one control sample
-// (run_budget.h's model; the SDF grids are left to check_run_budget, which still refuses a run over the limit).
+// (run_budget.h's model) within half the limit, the other half left for the SDF grids and for the blue-noise
+// sampler's extra samples on thin walls, which check_run_budget counts and refuses beyond the limit.
 double count_memory_allows(const scene::Scene& s) {
   const double limit = memory_limit_mib(s, std::nullopt);
-  return std::max(0.0, (limit - kBaseMib) * 1024.0 / (kFluidKib + kSampleKib));
+  return std::max(0.0, (0.5 * limit - kBaseMib) * 1024.0 / (kFluidKib + kSampleKib));
 }
 
 // The particle radius from the targets' volume (or area): d³ per sample (the blue-noise count is V/d³); an open
@@ -146,7 +147,7 @@ Status size_particles(scene::Scene& s, const std::vector<TargetGeometry>& target
     if (const auto& th = targets[k].thickness; th && (z.target < 0 || th->thinnest < z.wall))
       z.target = static_cast<int>(k), z.wall = th->thinnest;
   double d = d_volume;
-  if (z.target >= 0 && volume > 0.0 && z.wall < kWallSpacings * d_volume) {
+  if (z.target >= 0 && volume > 0.0 && z.wall > 0.0 && z.wall < kWallSpacings * d_volume) {
     // The count goes as 1/d³: the spacing a wall needs, as a count.
     z.count_for_walls = n * std::pow(kWallSpacings * d_volume / z.wall, 3.0);
     // A skinned target keeps auto_count: the walking demo character at the ~21.7k its limbs ask for held 95.6 %

@@ -261,26 +261,32 @@ double orient_by_volume(const io::TriangleMesh& mesh, std::vector<Tri>& tris, co
   }
   // The visibility check costs ~350 rays × every triangle per patch: done for at most ~4e8 ray-triangle tests.
   std::vector<Index> doubtful;
+  std::vector<std::uint8_t> keep(patches, 0);
   for (Index p = 0; p < patches; ++p)
     if (volume[p] < 0.0 && patches_in[comp_of[p]] > 1 && vector_area[p].norm() > 1e-6 * area[p]) doubtful.push_back(p);
   if (!doubtful.empty() && double(doubtful.size()) * 350.0 * double(tris.size()) <= 4e8) {
-    const double offset = 1e-5 * box[comp_of[doubtful[0]]].size().norm();
     std::vector<int> side(doubtful.size(), 0);
     core::parallel_for(static_cast<std::int64_t>(doubtful.size()), [&](std::int64_t i) {
       const auto k = static_cast<std::size_t>(i);
+      const double offset = 1e-5 * box[comp_of[doubtful[k]]].size().norm();  // off the patch, into each side
       side[k] = visible_side(mesh, tris, patch, doubtful[k], offset);
     });
     for (std::size_t k = 0; k < doubtful.size(); ++k)
-      if (side[k] > 0) volume[doubtful[k]] = -volume[doubtful[k]];  // it faces out as it is: keep it
+      if (side[k] > 0) keep[doubtful[k]] = 1;  // it faces out as it is
+  }
+  // A patch is flipped when its volume is negative and it is not kept. The total is Σ of the oriented patches'
+  // signed volumes about their component's centre: a kept open patch adds its (negative) share, so the welded
+  // bin reads its slabs' volume, not the box's.
+  double total = 0.0;
+  for (Index p = 0; p < patches; ++p) {
+    const bool flip = volume[p] < 0.0 && !keep[p];
+    flipped += flip;
+    total += flip ? -volume[p] : volume[p];
+    volume[p] = flip ? -1.0 : 1.0;  // from here on: the flip mark
   }
   for (std::size_t t = 0; t < tris.size(); ++t)
     if (volume[patch[t]] < 0.0) std::swap(tris[t][1], tris[t][2]);
-  double total = 0.0;
-  for (const double v : volume) {
-    flipped += v < 0.0;
-    total += std::abs(v);
-  }
-  return total;
+  return std::max(total, 0.0);
 }
 
 // Σ over boundary loops of |½ Σ p_i × p_{i+1}|: the area of the hole each loop leaves. Boundary edges are

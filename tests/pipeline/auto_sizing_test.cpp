@@ -85,11 +85,20 @@ TEST_F(AutoSizing, TheBudgetHoldsTheCountBackAndTheLineSaysWhatWouldResolveIt) {
 }
 
 TEST_F(AutoSizing, TheMemoryLimitHoldsTheCountBack) {
-  // 50 MiB: the model's 15 MiB base and 2.6 KiB a particle leave room for ~13.8k.
-  const auto c = complete(dir_, R"({"targets": [{"mesh": "plate.obj"}], "limits": {"max_memory_mb": 50}})");
+  // 80 MiB: half of it less the model's 15 MiB base, at 2.6 KiB a particle, leaves room for ~9.8k: the count stays
+  // at 10k (it never falls below auto_count), and the run still fits the limit.
+  const auto c = complete(dir_, R"({"targets": [{"mesh": "plate.obj"}], "limits": {"max_memory_mb": 80}})");
   EXPECT_EQ(c.scene.sizing.limited_by, "memory");
-  EXPECT_NEAR(c.scene.sizing.count, (50.0 - kBaseMib) * 1024.0 / (kFluidKib + kSampleKib), 1.0);
-  const auto line = thin_wall_warning(c.scene, 0, c.targets[0]);
+  EXPECT_EQ(c.scene.sizing.count, 10000.0);
+  const auto e = check_run_budget(c.scene, c.targets, std::nullopt);
+  EXPECT_TRUE(e.has_value()) << e.error().message;
+  // 120 MiB: room for (60 − 15) MiB / 2.6 KiB ≈ 17.7k, and the run's estimate within the limit.
+  const auto d = complete(dir_, R"({"targets": [{"mesh": "plate.obj"}], "limits": {"max_memory_mb": 120}})");
+  EXPECT_EQ(d.scene.sizing.limited_by, "memory");
+  EXPECT_NEAR(d.scene.sizing.count, (0.5 * 120.0 - kBaseMib) * 1024.0 / (kFluidKib + kSampleKib), 1.0);
+  const auto f = check_run_budget(d.scene, d.targets, std::nullopt);
+  EXPECT_TRUE(f.has_value()) << f.error().message;
+  const auto line = thin_wall_warning(d.scene, 0, d.targets[0]);
   ASSERT_TRUE(line.has_value());
   EXPECT_NE(line->find("limits.max_memory_mb"), std::string::npos) << *line;
 }

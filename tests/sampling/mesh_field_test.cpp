@@ -300,6 +300,7 @@ TEST(FF_SUITE(MeshField), PartsWeldedWhereTheyTouchKeepTheirInnerFaces) {
   const MeshField welded = field_of(*loaded), parts = field_of(bin);
   EXPECT_EQ(welded.stats().flipped_patches, 0u);
   EXPECT_TRUE(welded.closed()) << "every edge walked as often each way once no patch is turned round";
+  EXPECT_NEAR(welded.volume(), parts.volume(), 1e-3 * parts.volume()) << "the slabs' volume, not the box's";
   for (const float y : {-0.3f, -0.25f, -0.2f, -0.1f, 0.0f, 0.2f})
     EXPECT_FALSE(welded.inside(Vec3f(0.01f, y, 0.02f))) << "in the bin at y = " << y << ", w = " << welded.winding_number(Vec3f(0.01f, y, 0.02f));
   std::size_t disagree = 0;
