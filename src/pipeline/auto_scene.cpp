@@ -339,18 +339,19 @@ std::optional<std::string> thin_wall_warning(const scene::Scene& s, std::size_t 
   if (!t.thickness || t.thickness->thinnest >= (kWallSpacings - 1e-3) * d) return std::nullopt;
   const double need = t.thickness->thinnest / kWallSpacings;
   const Vec3f& w = t.thickness->where;
-  // What count would resolve it, and what to change: the count's budget when that held it back.
+  // What count would resolve it (the count goes as 1/d³), and what to change: the count's budget when that held it back.
   const double count = s.sizing.count > 0.0 ? s.sizing.count : double(s.sampling.auto_count);
+  const double would = count * std::pow(d / need, 3.0);
   const std::string knob =
       !s.auto_radius                    ? std::string(" (solver.particle_radius)")
       : s.sizing.limited_by == "skinned"
           ? fmt::format(", about {:.3g} particles (sampling.auto_count: a scene with a skinned target "
-                        "keeps it unless the scene names a count)", count * std::pow(d / need, 3.0))
+                        "keeps it unless the scene names a count)", would)
       : s.sizing.limited_by == "memory" ? fmt::format(", about {:.3g} particles, more than the memory limit allows "
-                                                      "(limits.max_memory_mb)", count * std::pow(d / need, 3.0))
+                                                      "(limits.max_memory_mb)", would)
       : s.auto_resolution               ? fmt::format(", about {:.3g} particles, over the budget of {} (sampling.max_auto_count)",
-                                                      count * std::pow(d / need, 3.0), s.sampling.max_auto_count)
-                                        : fmt::format(", about {:.3g} particles (sampling.auto_count)", count * std::pow(d / need, 3.0));
+                                                      would, s.sampling.max_auto_count)
+                                        : fmt::format(", about {:.3g} particles (sampling.auto_count)", would);
   return fmt::format("target {}: walls {:.3g} m thin near ({:.3g}, {:.3g}, {:.3g}) are {:.1f} spacings across (d = {:.3g} m) "
                      "and may come out with holes: {:g} spacings need d <= {:.3g} m{}",
                      k, t.thickness->thinnest, w.x(), w.y(), w.z(), t.thickness->thinnest / d, d, kWallSpacings, need, knob);
