@@ -1,6 +1,7 @@
 #include "pipeline/front_doors.h"
 
 #include "control/registry.h"
+#include "gpu/context.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 #include "io/load_mesh.h"
@@ -148,6 +149,13 @@ Result<RunRecording> open_run(const fs::path& out) {
     if (c_step < v.size()) r.step_seconds[std::size_t(f)] = std::strtod(v[c_step].c_str(), nullptr);
   }
   return r;
+}
+
+Result<std::vector<GpuDevice>> gpu_devices() {
+  FF_TRY(std::vector<gpu::DeviceInfo> found, gpu::list_devices());
+  std::vector<GpuDevice> out;
+  for (const gpu::DeviceInfo& d : found) out.push_back({d.index, d.name, d.type, d.driver, d.api, d.memory_bytes, d.compute});
+  return out;
 }
 
 }  // namespace ff::pipeline

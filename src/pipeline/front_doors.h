@@ -89,4 +89,16 @@ struct RunRecording {
 };
 Result<RunRecording> open_run(const std::filesystem::path& run_dir);
 
+// ---- GPU devices (`fluidform devices`) ----
+
+/// One Vulkan device (gpu::DeviceInfo, copied so the front doors need not include the stage).
+struct GpuDevice {
+  int index = 0;
+  std::string name, type, driver, api;  ///< type: "discrete", "integrated", "virtual", "cpu", "other"
+  std::uint64_t memory_bytes = 0;       ///< the largest device-local heap
+  bool compute = false;
+};
+/// The Vulkan devices of this machine; an Error (one line) when there is no Vulkan loader or driver.
+Result<std::vector<GpuDevice>> gpu_devices();
+
 }  // namespace ff::pipeline

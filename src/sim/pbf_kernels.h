@@ -25,6 +25,14 @@ struct PbfDeltaConsts {
   Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();  // walls: x* is clamped to them
 };
 
+/// The sub-step's forces and prediction (gravity and XSPH; the GPU's force pass, gpu/pbf_device.h).
+struct PbfForceConsts {
+  Vec3f gravity = Vec3f::Zero();  // m/s²
+  float dt = 0;                   // s, the sub-step
+  float xsph = 0;                 // XSPH viscosity η / Δt (0: none)
+  float mass_poly6_k = 0;         // m · Poly6 k: (m/ρ_j) W_ij = mass_poly6_k (h² − r²)³ / ρ_j
+};
+
 /// λ at x* (s.x/y/z): density[point] per particle, lambda in s's padded layout (0 at padding).
 void pbf_lambda_clusters(const core::ClusterSet& s, const core::ClusterPairs& pairs, const PbfLambdaConsts& k,
                          float* density, float* lambda, std::size_t begin, std::size_t end);

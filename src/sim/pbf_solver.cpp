@@ -310,6 +310,31 @@ void PbfSolver::position_pass_lists(ParticleSet& p) {
   p.predicted.swap(next_);
 }
 
+PbfLambdaConsts PbfSolver::lambda_consts() const {
+  PbfLambdaConsts lk;
+  lk.h = spiky_.h, lk.h2 = spiky_.h2, lk.poly6_k = poly6_.k, lk.w0 = poly6_.w_zero();
+  lk.mass = mass_, lk.rho0 = rho0_, lk.epsilon = epsilon_;
+  // ∇_j C_i = (m/ρ0) ∇W_ij with ∇W = kgrad (h − |r|)² r/|r|: one coefficient per pair times r.
+  lk.cgrad = mass_ / rho0_ * spiky_.kgrad;
+  return lk;
+}
+
+// Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j),  s_corr = −k (W/W(Δq))ⁿ / S_0.
+PbfDeltaConsts PbfSolver::delta_consts() const {
+  PbfDeltaConsts dk;
+  dk.h = spiky_.h, dk.h2 = spiky_.h2, dk.kgrad = spiky_.kgrad, dk.w_ratio = poly6_.k / w_dq_;
+  dk.scorr_c = -params_.scorr_k / s0_, dk.scorr_n = params_.scorr_k > 0.0f ? params_.scorr_n : 0;
+  dk.m_rho0 = mass_ / rho0_, dk.lo = wall_lo_, dk.hi = wall_hi_;
+  return dk;
+}
+
+// g + XSPH as xsph_accelerations() applies them (without drag and surface tension).
+PbfForceConsts PbfSolver::force_consts(float dt) const {
+  PbfForceConsts fk;
+  fk.gravity = params_.gravity, fk.dt = dt, fk.xsph = params_.viscosity / dt, fk.mass_poly6_k = mass_ * poly6_.k;
+  return fk;
+}
+
 // The alternative (PbfSolver::set_cluster_kernels): the two Jacobi passes on cluster pairs (sim/pbf_kernels.h): the list is built on x at the start of the
 // sub-step, the passes use x*, and lanes outside the support or at zero distance are masked, which matches the
 // scalar definitions: W and ∇W vanish at r ≥ h, ∇W is 0 at r = 0.
@@ -317,21 +342,14 @@ void PbfSolver::solve_iteration(ParticleSet& p) {
   if (!cluster_kernels_) return solve_iteration_lists(p);
   clusters_.update(p.predicted);
   lambda_c_.resize(clusters_.padded());
-  PbfLambdaConsts lk;
-  lk.h = spiky_.h, lk.h2 = spiky_.h2, lk.poly6_k = poly6_.k, lk.w0 = poly6_.w_zero();
-  lk.mass = mass_, lk.rho0 = rho0_, lk.epsilon = epsilon_;
-  // ∇_j C_i = (m/ρ0) ∇W_ij with ∇W = kgrad (h − |r|)² r/|r|: one coefficient per pair times r.
-  lk.cgrad = mass_ / rho0_ * spiky_.kgrad;
+  const PbfLambdaConsts lk = lambda_consts();
   const auto nc = static_cast<std::int64_t>(clusters_.clusters);
   core::parallel_blocks(nc, kClusterBlock, [&](std::int64_t b, std::int64_t e) {
     pbf_lambda_clusters(clusters_, pairs_, lk, p.density.data(), lambda_c_.data(), static_cast<std::size_t>(b),
                         static_cast<std::size_t>(e));
   });
   // Δx_i = (m/ρ0) Σ_j (λ_i + λ_j + s_corr) ∇W(x_i − x_j),  s_corr = −k (W/W(Δq))ⁿ / S_0.
-  PbfDeltaConsts dk;
-  dk.h = spiky_.h, dk.h2 = spiky_.h2, dk.kgrad = spiky_.kgrad, dk.w_ratio = poly6_.k / w_dq_;
-  dk.scorr_c = -params_.scorr_k / s0_, dk.scorr_n = params_.scorr_k > 0.0f ? params_.scorr_n : 0;
-  dk.m_rho0 = mass_ / rho0_, dk.lo = wall_lo_, dk.hi = wall_hi_;
+  const PbfDeltaConsts dk = delta_consts();
   // Jacobi: the corrected positions go to a second buffer, which then becomes x*.
   core::parallel_blocks(nc, kClusterBlock, [&](std::int64_t b, std::int64_t e) {
     pbf_delta_clusters(clusters_, pairs_, lambda_c_.data(), dk, next_.data(), static_cast<std::size_t>(b),

@@ -28,6 +28,7 @@
 #include "sim/controller.h"
 #include "sim/drag.h"
 #include "sim/particle_set.h"
+#include "sim/pbf_kernels.h"
 #include "sim/solver_params.h"
 #include "sim/surface_tension.h"
 
@@ -78,6 +79,10 @@ class PbfSolver {
   /// default: at H_p = 2d a cluster pair's lanes are ~13 % useful and the passes run slower on the machines we
   /// measured (bench_pair_kernels, bench/RESULTS.md); kept for that benchmark and its test.
   void set_cluster_kernels(bool on) { cluster_kernels_ = on; }
+  /// The constants of the λ and Δx passes: the cluster kernels' and the GPU passes' (gpu/pbf_device.h) one source.
+  PbfLambdaConsts lambda_consts() const;
+  PbfDeltaConsts delta_consts() const;
+  PbfForceConsts force_consts(float dt) const;
 
  private:
   void search(ParticleSet& p);

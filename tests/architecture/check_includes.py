@@ -15,12 +15,13 @@ ALLOWED = {
     "io": {"core"},
     "sampling": {"core", "io"},
     "sim": {"core"},
+    "gpu": {"core", "sim"},
     "surface": {"core", "io"},
     "metrics": {"core", "io", "sampling"},
     "pose": {"core", "io", "sampling"},
     "control": {"core", "io", "sampling", "sim", "pose"},
     "scene": {"core", "io", "sampling", "sim", "surface", "pose", "control"},
-    "pipeline": {"core", "io", "sampling", "sim", "surface", "metrics", "pose", "control", "scene"},
+    "pipeline": {"core", "io", "sampling", "sim", "gpu", "surface", "metrics", "pose", "control", "scene"},
     # The front doors go through the pipeline: they include pipeline/, scene/ and the plain types of core/ and io/,
     # never a stage (sampling, sim, surface, metrics, pose, control), so a stage's entry point changes in one place.
     "server": {"core", "io", "scene", "pipeline"},
@@ -28,7 +29,7 @@ ALLOWED = {
     "python": {"core", "io", "scene", "pipeline"},
 }
 FRONT_DOORS = {"server", "app", "python"}
-STAGES = {"sampling", "sim", "surface", "metrics", "pose", "control"}
+STAGES = {"sampling", "sim", "gpu", "surface", "metrics", "pose", "control"}
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([a-z_]+)/[^"]+"')
 
 

@@ -1,0 +1,89 @@
+#pragma once
+// A Vulkan compute device: the instance, one device with one compute queue, a command pool, and what the GPU
+// passes need from it (memory types, timestamp period). Everything the stage allocates hangs off a Context, which
+// must outlive it.
+//
+// Validation: with `validation` set, the Khronos validation layer is enabled and every message of severity warning
+// or error is kept (`messages()`): the tests require none. A machine without the layer gets an error saying so.
+#include "core/error.h"
+#include "gpu/vulkan.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ff::gpu {
+
+/// One Vulkan physical device, as `fluidform devices` lists it.
+struct DeviceInfo {
+  int index = 0;              ///< order of vkEnumeratePhysicalDevices
+  std::string name;           ///< "NVIDIA H100 80GB HBM3", "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string type;           ///< "discrete", "integrated", "virtual", "cpu", "other"
+  std::string driver;         ///< driver name and info, e.g. "llvmpipe (Mesa 22.3.6 (LLVM 15.0.6))"
+  std::string api;            ///< "1.3.230"
+  std::uint64_t memory_bytes = 0;  ///< the largest device-local heap
+  bool compute = false;       ///< has a queue family with compute
+};
+
+/// The Vulkan devices of this machine; an Error when there is no loader or no instance can be made.
+Result<std::vector<DeviceInfo>> list_devices();
+
+struct ContextOptions {
+  int device = -1;          ///< index into list_devices(); −1: the first with a compute queue
+  bool validation = false;  ///< enable VK_LAYER_KHRONOS_validation and keep its warnings and errors
+};
+
+class Context {
+ public:
+  static Result<std::unique_ptr<Context>> create(const ContextOptions& options);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& info() const { return info_; }
+  VkDevice device() const { return device_; }
+  VkQueue queue() const { return queue_; }
+  VkCommandPool command_pool() const { return pool_; }
+  float timestamp_period_ns() const { return timestamp_period_; }
+  /// Valid bits of the compute queue's timestamps (0: it has none).
+  std::uint32_t timestamp_valid_bits() const { return timestamp_bits_; }
+  /// A memory type among `type_bits` with all of `wanted`; −1 if none.
+  int memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted) const;
+  /// Validation messages (warnings and errors) so far, one line each.
+  const std::vector<std::string>& messages() const { return messages_; }
+  void add_message(std::string m) { messages_.push_back(std::move(m)); }
+
+  /// Records commands into a one-time command buffer, submits it and waits for it.
+  template <class Record>
+  Status submit_and_wait(Record&& record);
+
+ private:
+  Context() = default;
+  Status begin_one_shot(VkCommandBuffer& cb);
+  Status end_one_shot(VkCommandBuffer cb);
+
+  DeviceInfo info_;
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  std::uint32_t queue_family_ = 0;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  VkFence fence_ = VK_NULL_HANDLE;
+  VkPhysicalDeviceMemoryProperties memory_{};
+  float timestamp_period_ = 0;
+  std::uint32_t timestamp_bits_ = 0;
+  std::vector<std::string> messages_;
+};
+
+template <class Record>
+Status Context::submit_and_wait(Record&& record) {
+  VkCommandBuffer cb = VK_NULL_HANDLE;
+  FF_CHECK(begin_one_shot(cb));
+  record(cb);
+  return end_one_shot(cb);
+}
+
+}  // namespace ff::gpu

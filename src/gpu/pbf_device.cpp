@@ -1,0 +1,298 @@
+#include "gpu/pbf_device.h"
+
+#include "gpu/shaders.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace ff::gpu {
+
+namespace {
+
+// The push-constant block of shaders/common.glsl, word for word.
+struct Constants {
+  float grid_lo[4];    // xyz corner, w 1/cell
+  std::int32_t grid_dims[4];  // xyz cells, w n
+  float k0[4];         // h, h², Poly6 k, W(0)
+  float k1[4];         // mass, ρ0, ε, cgrad
+  float k2[4];         // Δx: kgrad, w_ratio, scorr_c, scorr_n; force and update: gravity xyz, Δt
+  float wall_lo[4];    // xyz walls, w m/ρ0
+  float wall_hi[4];
+  float k3[4];         // force: XSPH η/Δt, m · Poly6 k
+};
+static_assert(sizeof(Constants) == kPushConstantBytes, "shaders/common.glsl's push-constant block is 128 bytes");
+
+Constants make_constants(const GridSpec& g, std::size_t n, const sim::PbfLambdaConsts* lk, const sim::PbfDeltaConsts* dk) {
+  Constants c{};
+  c.grid_lo[0] = g.lo.x(), c.grid_lo[1] = g.lo.y(), c.grid_lo[2] = g.lo.z(), c.grid_lo[3] = 1.0f / g.cell;
+  for (int a = 0; a < 3; ++a) c.grid_dims[a] = g.dims[static_cast<std::size_t>(a)];
+  c.grid_dims[3] = static_cast<std::int32_t>(n);
+  if (lk) {
+    c.k0[0] = lk->h, c.k0[1] = lk->h2, c.k0[2] = lk->poly6_k, c.k0[3] = lk->w0;
+    c.k1[0] = lk->mass, c.k1[1] = lk->rho0, c.k1[2] = lk->epsilon, c.k1[3] = lk->cgrad;
+  }
+  if (dk) {
+    c.k2[0] = dk->kgrad, c.k2[1] = dk->w_ratio, c.k2[2] = dk->scorr_c, c.k2[3] = static_cast<float>(dk->scorr_n);
+    for (int a = 0; a < 3; ++a) c.wall_lo[a] = dk->lo[a], c.wall_hi[a] = dk->hi[a];
+    c.wall_lo[3] = dk->m_rho0;
+  }
+  return c;
+}
+
+// The force and update passes read gravity and Δt where the Δx pass reads its constants: their own block.
+Constants force_constants(Constants c, const sim::PbfForceConsts& fk) {
+  for (int a = 0; a < 3; ++a) c.k2[a] = fk.gravity[a];
+  c.k2[3] = fk.dt;
+  c.k3[0] = fk.xsph, c.k3[1] = fk.mass_poly6_k;
+  return c;
+}
+
+std::uint32_t groups(std::size_t items, std::uint32_t size) { return static_cast<std::uint32_t>((items + size - 1) / size); }
+
+}  // namespace
+
+Result<GridSpec> GridSpec::covering(const Vec3f& lo, const Vec3f& hi, float cell, std::size_t max_cells) {
+  if (!(cell > 0.0f) || !std::isfinite(cell)) return param_error(fmt::format("GPU grid: cell edge {} is not positive", cell));
+  if (!lo.allFinite() || !hi.allFinite() || (hi - lo).minCoeff() < 0.0f)
+    return param_error("GPU grid: the box is empty or not finite");
+  GridSpec g;
+  g.lo = lo;
+  g.cell = cell;
+  std::size_t total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double cells = std::floor(static_cast<double>(hi[a] - lo[a]) / cell) + 1.0;
+    if (cells > static_cast<double>(max_cells)) return param_error("GPU grid: too many cells");
+    g.dims[static_cast<std::size_t>(a)] = static_cast<int>(cells);
+    total *= static_cast<std::size_t>(cells);
+    if (total > max_cells)
+      return param_error(fmt::format("GPU grid: {:.3g} m cells over the box need more than {} cells", cell, max_cells));
+  }
+  return g;
+}
+
+Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n, const GridSpec& grid) {
+  if (n == 0) return param_error("GPU PBF: no particles");
+  if (n > static_cast<std::size_t>(INT32_MAX)) return param_error("GPU PBF: more than 2^31 particles");
+  std::unique_ptr<PbfDevice> d(new PbfDevice());
+  d->ctx_ = &ctx;
+  d->n_ = n;
+  d->grid_ = grid;
+  const VkDeviceSize v4 = n * 16, u = n * 4, cells = grid.cells();
+  FF_TRY(d->pos_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->next_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->cell_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->count_, DeviceBuffer::create(ctx, cells * 4));
+  FF_TRY(d->start_, DeviceBuffer::create(ctx, (cells + 1) * 4));
+  FF_TRY(d->items_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->density_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->lambda_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->x_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->vel_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->count_k_, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&d->pos_, &d->cell_, &d->count_}));
+  FF_TRY(d->scan_k_, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&d->count_, &d->start_}));
+  FF_TRY(d->scatter_k_, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(),
+                                       {&d->cell_, &d->start_, &d->count_, &d->items_}));
+  FF_TRY(d->order_k_, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&d->start_, &d->items_}));
+  FF_TRY(d->lambda_k_, Kernel::create(ctx, "pbf_lambda", shaders::pbf_lambda(),
+                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->density_, &d->lambda_}));
+  FF_TRY(d->delta_k_, Kernel::create(ctx, "pbf_delta", shaders::pbf_delta(),
+                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->lambda_, &d->next_}));
+  FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
+                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->next_}));
+  FF_TRY(d->update_k_, Kernel::create(ctx, "pbf_update", shaders::pbf_update(), {&d->pos_, &d->x_, &d->vel_}));
+  if (ctx.timestamp_valid_bits() > 0 && ctx.timestamp_period_ns() > 0.0f) {
+    VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qi.queryCount = 4 + 3 * kMaxTimedIterations;
+    if (vkCreateQueryPool(ctx.device(), &qi, nullptr, &d->timestamps_) != VK_SUCCESS) d->timestamps_ = VK_NULL_HANDLE;
+  }
+  return d;
+}
+
+PbfDevice::~PbfDevice() {
+  if (timestamps_) vkDestroyQueryPool(ctx_->device(), timestamps_, nullptr);
+}
+
+std::size_t PbfDevice::bytes() const {
+  return pos_.bytes() + next_.bytes() + cell_.bytes() + count_.bytes() + start_.bytes() + items_.bytes() +
+         density_.bytes() + lambda_.bytes() + x_.bytes() + vel_.bytes();
+}
+
+Status PbfDevice::set_predicted(std::span<const Vec3f> x) {
+  if (x.size() != n_) return param_error(fmt::format("GPU PBF: {} positions for {} particles", x.size(), n_));
+  std::vector<float> packed(4 * n_, 0.0f);
+  for (std::size_t i = 0; i < n_; ++i) std::memcpy(&packed[4 * i], x[i].data(), 3 * sizeof(float));
+  return pos_.upload(packed.data(), packed.size() * sizeof(float));
+}
+
+Status PbfDevice::get_predicted(std::vector<Vec3f>& x) const {
+  std::vector<float> packed(4 * n_);
+  FF_CHECK(pos_.download(packed.data(), packed.size() * sizeof(float)));
+  x.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) x[i] = Vec3f(packed[4 * i], packed[4 * i + 1], packed[4 * i + 2]);
+  return {};
+}
+
+Status PbfDevice::get_density(std::vector<float>& rho) const {
+  rho.resize(n_);
+  return density_.download(rho.data(), n_ * sizeof(float));
+}
+
+Status PbfDevice::get_lambda(std::vector<float>& lambda) const {
+  lambda.resize(n_);
+  return lambda_.download(lambda.data(), n_ * sizeof(float));
+}
+
+Status PbfDevice::get_grid(std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& items) const {
+  start.resize(grid_.cells() + 1);
+  items.resize(n_);
+  FF_CHECK(start_.download(start.data(), start.size() * 4));
+  return items_.download(items.data(), items.size() * 4);
+}
+
+// Counting sort of the particles into the grid's cells: count, scan, scatter, order each cell's run by index.
+void PbfDevice::record_grid(VkCommandBuffer cb, const void* constants) const {
+  vkCmdFillBuffer(cb, count_.handle(), 0, VK_WHOLE_SIZE, 0);
+  compute_barrier(cb);
+  count_k_.dispatch(cb, constants, groups(n_, 256));
+  compute_barrier(cb);
+  scan_k_.dispatch(cb, constants, 1);
+  compute_barrier(cb);
+  vkCmdFillBuffer(cb, count_.handle(), 0, VK_WHOLE_SIZE, 0);  // the counts become the scatter's cursors
+  compute_barrier(cb);
+  scatter_k_.dispatch(cb, constants, groups(n_, 256));
+  compute_barrier(cb);
+  order_k_.dispatch(cb, constants, groups(grid_.cells(), 256));
+  compute_barrier(cb);
+}
+
+template <class Stamp>
+void PbfDevice::record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp) const {
+  const VkBufferCopy all{0, 0, n_ * 16};
+  for (int it = 0; it < iterations; ++it) {
+    lambda_k_.dispatch(cb, constants, groups(n_, 128));
+    compute_barrier(cb);
+    stamp(cb);
+    delta_k_.dispatch(cb, constants, groups(n_, 128));
+    compute_barrier(cb);
+    stamp(cb);
+    vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // Jacobi: x* ← next
+    compute_barrier(cb);
+    stamp(cb);
+  }
+}
+
+// Timestamps of a timed submission: [0] start, [1] after the grid, then (substep only) [2] after the force pass and
+// its copy, then three per sweep, then (substep only) one after the update.
+Status PbfDevice::read_times(int iterations, bool with_force, PassTimes& times) const {
+  const std::uint32_t sweeps = static_cast<std::uint32_t>(iterations);
+  const std::uint32_t queries = 2 + (with_force ? 2u : 0u) + 3 * sweeps;
+  std::vector<std::uint64_t> t(queries);
+  if (const VkResult r = vkGetQueryPoolResults(ctx_->device(), timestamps_, 0, queries, t.size() * 8, t.data(), 8,
+                                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+      r != VK_SUCCESS)
+    return io_error(fmt::format("Vulkan: reading the timestamps failed ({})", vk_result_name(r)));
+  const double ms = ctx_->timestamp_period_ns() * 1e-6;
+  const std::uint32_t bits = ctx_->timestamp_valid_bits();
+  const std::uint64_t mask = bits >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << bits) - 1;  // counters may wrap
+  const auto span = [&](std::uint32_t a, std::uint32_t b) { return static_cast<double>((t[b] - t[a]) & mask) * ms; };
+  times.grid = span(0, 1);
+  std::uint32_t q = 1;
+  if (with_force) times.force = span(1, 2), q = 2;
+  for (std::uint32_t it = 0; it < sweeps; ++it, q += 3) {
+    times.lambda += span(q, q + 1);
+    times.delta += span(q + 1, q + 2);
+    times.copy += span(q + 2, q + 3);
+  }
+  if (with_force) times.update = span(q, q + 1);
+  return {};
+}
+
+Status PbfDevice::solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, int iterations, PassTimes* times) {
+  if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
+  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  if (times) *times = {};
+  const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
+  std::uint32_t q = 0;
+  // A timestamp after everything recorded so far has finished (the barriers before it order the passes).
+  const auto stamp = [&](VkCommandBuffer cb) {
+    if (timed) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, q++);
+  };
+  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
+    stamp(cb);
+    record_grid(cb, &c);
+    stamp(cb);
+    record_sweeps(cb, &c, iterations, stamp);
+  }));
+  return timed ? read_times(iterations, false, *times) : Status{};
+}
+
+Status PbfDevice::set_state(std::span<const Vec3f> x, std::span<const Vec3f> v) {
+  if (x.size() != n_ || v.size() != n_)
+    return param_error(fmt::format("GPU PBF: {} positions and {} velocities for {} particles", x.size(), v.size(), n_));
+  std::vector<float> packed(4 * n_, 0.0f);
+  for (std::size_t i = 0; i < n_; ++i) std::memcpy(&packed[4 * i], x[i].data(), 3 * sizeof(float));
+  FF_CHECK(x_.upload(packed.data(), packed.size() * sizeof(float)));
+  for (std::size_t i = 0; i < n_; ++i) std::memcpy(&packed[4 * i], v[i].data(), 3 * sizeof(float));
+  return vel_.upload(packed.data(), packed.size() * sizeof(float));
+}
+
+Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const {
+  std::vector<float> px(4 * n_), pv(4 * n_);
+  FF_CHECK(x_.download(px.data(), px.size() * sizeof(float)));
+  FF_CHECK(vel_.download(pv.data(), pv.size() * sizeof(float)));
+  x.resize(n_);
+  v.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    x[i] = Vec3f(px[4 * i], px[4 * i + 1], px[4 * i + 2]);
+    v[i] = Vec3f(pv[4 * i], pv[4 * i + 1], pv[4 * i + 2]);
+  }
+  return {};
+}
+
+Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
+                          int iterations, PassTimes* times) {
+  if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
+  if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
+  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  const Constants cf = force_constants(c, fk);
+  if (times) *times = {};
+  const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
+  std::uint32_t q = 0;
+  const auto stamp = [&](VkCommandBuffer cb) {
+    if (timed) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, q++);
+  };
+  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
+    stamp(cb);
+    // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
+    const VkBufferCopy all{0, 0, n_ * 16};
+    vkCmdCopyBuffer(cb, x_.handle(), pos_.handle(), 1, &all);
+    compute_barrier(cb);
+    record_grid(cb, &c);
+    stamp(cb);
+    lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
+    compute_barrier(cb);
+    force_k_.dispatch(cb, &cf, groups(n_, 128));
+    compute_barrier(cb);
+    vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // x* from the prediction
+    compute_barrier(cb);
+    stamp(cb);
+    record_sweeps(cb, &c, iterations, stamp);
+    update_k_.dispatch(cb, &cf, groups(n_, 256));
+    compute_barrier(cb);
+    stamp(cb);
+  }));
+  return timed ? read_times(iterations, true, *times) : Status{};
+}
+
+Status PbfDevice::lambda_only(const sim::PbfLambdaConsts& lk) {
+  const Constants c = make_constants(grid_, n_, &lk, nullptr);
+  return ctx_->submit_and_wait([&](VkCommandBuffer cb) { lambda_k_.dispatch(cb, &c, groups(n_, 128)); });
+}
+
+}  // namespace ff::gpu

@@ -1,0 +1,102 @@
+#pragma once
+// The PBF constraint solve of one sub-step on a Vulkan device (issue 45; METHOD.md §c.2, sim/pbf_solver.cpp is the
+// CPU reference): a uniform grid built by counting sort, then Jacobi iterations of λ and Δx, the state staying in
+// device memory between passes. The constants are the CPU solver's (sim::PbfLambdaConsts, sim::PbfDeltaConsts),
+// so both paths are fed from one place.
+//
+// The grid. Cells are cubes of edge `cell` ≥ h over a box; positions outside it fall into its border cells. The
+// grid is built once per solve() on x* as it is then (the CPU cluster path builds its lists once per sub-step too),
+// each particle keeps that cell, and the passes search the 27 cells around it, testing the distance at the current
+// x*: a cell edge a little above h keeps pairs that come into range during the iterations.
+//
+// Determinism: counts and the prefix sum are integers, each cell's run is sorted by particle index after the
+// scatter, and λ and Δx are gathers (each invocation writes only its own particle) summing neighbours in that
+// fixed order. Two solves of the same input on one device give the same bits.
+#include "core/error.h"
+#include "core/types.h"
+#include "gpu/context.h"
+#include "gpu/kernel.h"
+#include "sim/pbf_kernels.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace ff::gpu {
+
+/// A uniform grid of `dims` cells of edge `cell` from corner `lo`.
+struct GridSpec {
+  Vec3f lo = Vec3f::Zero();
+  float cell = 0;
+  std::array<int, 3> dims{1, 1, 1};
+
+  /// The grid of cells of edge `cell` covering the box [lo, hi]; an Error if it has more than `max_cells`.
+  static Result<GridSpec> covering(const Vec3f& lo, const Vec3f& hi, float cell, std::size_t max_cells = 1u << 26);
+  std::size_t cells() const {
+    return static_cast<std::size_t>(dims[0]) * static_cast<std::size_t>(dims[1]) * static_cast<std::size_t>(dims[2]);
+  }
+};
+
+/// Device time of the passes of one solve() (timestamp queries), milliseconds; λ, Δx and the copy summed over the
+/// iterations. All zero where the device has no timestamps.
+struct PassTimes {
+  double grid = 0, force = 0, lambda = 0, delta = 0, copy = 0, update = 0;
+  double total() const { return grid + force + lambda + delta + copy + update; }
+};
+
+class PbfDevice {
+ public:
+  /// Buffers and kernels for `n` particles (n ≥ 1) on `grid`; `ctx` must outlive the PbfDevice.
+  static Result<std::unique_ptr<PbfDevice>> create(Context& ctx, std::size_t n, const GridSpec& grid);
+
+  std::size_t size() const { return n_; }
+  /// x* to the device (n positions).
+  Status set_predicted(std::span<const Vec3f> x);
+  Status get_predicted(std::vector<Vec3f>& x) const;
+  Status get_density(std::vector<float>& rho) const;
+  Status get_lambda(std::vector<float>& lambda) const;
+  /// The particles' state between sub-steps: positions x and velocities v (n each).
+  Status set_state(std::span<const Vec3f> x, std::span<const Vec3f> v);
+  Status get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const;
+  /// One sub-step of the state (sim::PbfSolver::substep without a controller, surface tension, drag or vorticity,
+  /// and with a fixed sweep count): the grid on x, ρ(x), the forces and x*, `iterations` sweeps, v = (x* − x)/Δt and
+  /// x = x*. One submission; waits for it.
+  Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
+                 int iterations, PassTimes* times = nullptr);
+  /// The grid of the last solve: start (cells + 1 offsets into items) and items (particle indices by cell, then
+  /// by index).
+  Status get_grid(std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& items) const;
+
+  /// The grid on x*, then `iterations` Jacobi sweeps: λ (and density) at x*, next = clamp(x* + Δx), x* ← next.
+  /// iterations = 0 builds the grid only. One submission; waits for it.
+  /// With `times`, the passes are timed on the device (timestamp queries) into it.
+  Status solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, int iterations, PassTimes* times = nullptr);
+  /// One λ pass at x* on the grid of the last solve (density and λ only, x* unchanged).
+  Status lambda_only(const sim::PbfLambdaConsts& lk);
+
+  /// Device memory held, in bytes.
+  std::size_t bytes() const;
+  /// Whether the device's queue has timestamps (solve() then fills PassTimes).
+  bool has_timestamps() const { return timestamps_ != VK_NULL_HANDLE; }
+  ~PbfDevice();
+
+ private:
+  PbfDevice() = default;
+  void record_grid(VkCommandBuffer cb, const void* constants) const;
+  // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed).
+  template <class Stamp>
+  void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp) const;
+  Status read_times(int iterations, bool with_force, PassTimes& times) const;
+
+  Context* ctx_ = nullptr;
+  std::size_t n_ = 0;
+  GridSpec grid_;
+  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_;
+  Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, update_k_;
+  VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 4 + 3·kMaxTimedIterations queries
+  static constexpr int kMaxTimedIterations = 64;
+};
+
+}  // namespace ff::gpu

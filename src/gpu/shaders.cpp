@@ -1,0 +1,56 @@
+#include "gpu/shaders.h"
+
+namespace ff::gpu::shaders {
+
+// Each NAME.inc is glslc's `-mfmt=num` output: the module's words as a comma-separated list.
+std::span<const std::uint32_t> grid_count() {
+  static constexpr std::uint32_t kWords[] = {
+#include "grid_count.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> grid_scan() {
+  static constexpr std::uint32_t kWords[] = {
+#include "grid_scan.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> grid_scatter() {
+  static constexpr std::uint32_t kWords[] = {
+#include "grid_scatter.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> grid_order() {
+  static constexpr std::uint32_t kWords[] = {
+#include "grid_order.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> pbf_lambda() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_lambda.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> pbf_delta() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_delta.inc"
+  };
+  return kWords;
+}
+
+std::span<const std::uint32_t> pbf_force() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_force.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> pbf_update() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_update.inc"
+  };
+  return kWords;
+}
+
+}  // namespace ff::gpu::shaders

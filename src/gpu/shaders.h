@@ -1,0 +1,17 @@
+#pragma once
+// The compute shaders of shaders/*.comp as SPIR-V words, compiled by glslc at build time (src/gpu/CMakeLists.txt).
+#include <cstdint>
+#include <span>
+
+namespace ff::gpu::shaders {
+
+std::span<const std::uint32_t> grid_count();
+std::span<const std::uint32_t> grid_scan();
+std::span<const std::uint32_t> grid_scatter();
+std::span<const std::uint32_t> grid_order();
+std::span<const std::uint32_t> pbf_lambda();
+std::span<const std::uint32_t> pbf_delta();
+std::span<const std::uint32_t> pbf_force();
+std::span<const std::uint32_t> pbf_update();
+
+}  // namespace ff::gpu::shaders

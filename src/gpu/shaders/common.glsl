@@ -1,0 +1,29 @@
+// What every pass of the PBF sub-step shares: the push constants (one block for all passes, 128 bytes, the least
+// every Vulkan device offers) and the uniform grid's cell of a position. The host fills the block from
+// gpu::PassConstants (gpu/pbf_device.h); the two layouts are checked against each other by a static_assert there.
+layout(push_constant) uniform Constants {
+  vec4 grid_lo;      // xyz: the grid's lower corner, w: 1 / cell edge
+  ivec4 grid_dims;   // xyz: cells per axis, w: particle count n
+  vec4 k0;           // h, h², Poly6 k, W(0)
+  vec4 k1;           // mass, ρ0, ε, cgrad = (m/ρ0)·Spiky kgrad
+  vec4 k2;           // Δx pass: Spiky kgrad, Poly6 k / W(Δq), −k_corr / S_0, s_corr exponent n (0: no s_corr);
+                     // force and update passes: gravity xyz, w: Δt
+  vec4 wall_lo;      // xyz: the walls' lower corner, w: m/ρ0
+  vec4 wall_hi;      // xyz: the walls' upper corner
+  vec4 k3;           // force pass: x: XSPH η/Δt, y: m · Poly6 k
+} C;
+
+uint grid_cells() { return uint(C.grid_dims.x) * uint(C.grid_dims.y) * uint(C.grid_dims.z); }
+
+// Cells are cubes of edge h (the support), so a particle's neighbours lie in the 27 cells around its own. Positions
+// outside the grid are clamped into its border cells: the distance test still decides, so nothing is lost, only
+// searched more slowly.
+ivec3 cell_coord(vec3 p) {
+  ivec3 c = ivec3(floor((p - C.grid_lo.xyz) * C.grid_lo.w));
+  return clamp(c, ivec3(0), C.grid_dims.xyz - 1);
+}
+uint cell_index(ivec3 c) { return uint(c.x + C.grid_dims.x * (c.y + C.grid_dims.y * c.z)); }
+ivec3 cell_of_index(uint c) {
+  const uint nx = uint(C.grid_dims.x), ny = uint(C.grid_dims.y);
+  return ivec3(int(c % nx), int((c / nx) % ny), int(c / (nx * ny)));
+}

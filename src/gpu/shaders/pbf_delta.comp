@@ -1,0 +1,49 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// PBF Δx (Macklin & Müller 2013, eqs. 12–14; sim/pbf_kernels.cpp is the CPU pass): next = clamp(x* + (m/ρ0)
+// Σ_j (λ_i + λ_j + s_corr) ∇W_ij) into the walls, s_corr = −k (W/W(Δq))ⁿ / S_0. Jacobi: reads x*, writes `next`.
+layout(local_size_x = 128) in;
+#include "common.glsl"
+layout(std430, binding = 0) readonly buffer Pos { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Cell { uint cell[]; };
+layout(std430, binding = 2) readonly buffer Start { uint start[]; };
+layout(std430, binding = 3) readonly buffer Items { uint items[]; };
+layout(std430, binding = 4) readonly buffer Lambda { float lambda[]; };
+layout(std430, binding = 5) writeonly buffer Next { vec4 next[]; };
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x;
+  if (i >= uint(C.grid_dims.w)) return;
+  const float h = C.k0.x, h2 = C.k0.y;
+  const float kgrad = C.k2.x, w_ratio = C.k2.y, scorr_c = C.k2.z;
+  const int scorr_n = int(C.k2.w);
+  const vec3 xi = pos[i].xyz;
+  const float lam_i = lambda[i];
+  const ivec3 ci = cell_of_index(cell[i]);  // the cell the grid was built with
+  vec3 d = vec3(0.0);
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const ivec3 cj = ci + ivec3(dx, dy, dz);
+        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
+        const uint c = cell_index(cj);
+        for (uint k = start[c]; k < start[c + 1u]; ++k) {
+          const uint j = items[k];
+          const vec3 r = xi - pos[j].xyz;
+          const float r2 = dot(r, r);
+          if (r2 >= h2 || r2 <= 0.0) continue;  // no gradient beyond h, none at r = 0 (itself included)
+          const float len = sqrt(r2);
+          float l = lam_i + lambda[j];
+          if (scorr_n > 0) {
+            const float q2 = h2 - r2;
+            const float ratio = w_ratio * q2 * q2 * q2;
+            float pw = ratio;
+            for (int e = 1; e < scorr_n; ++e) pw *= ratio;
+            l += scorr_c * pw;
+          }
+          const float q = h - len;
+          d += (l * kgrad * q * q / len) * r;
+        }
+      }
+  next[i] = vec4(clamp(xi + C.wall_lo.w * d, C.wall_lo.xyz, C.wall_hi.xyz), 0.0);
+}
