@@ -10,10 +10,8 @@
 
 namespace ff::gpu {
 
-namespace {
-
 // The push-constant block of shaders/common.glsl, word for word.
-struct Constants {
+struct PbfDevice::Constants {
   float grid_lo[4];    // xyz corner, w 1/cell
   std::int32_t grid_dims[4];  // xyz cells, w n
   float k0[4];         // h, h², Poly6 k, W(0)
@@ -23,7 +21,11 @@ struct Constants {
   float wall_hi[4];
   float k3[4];         // force: XSPH η/Δt, m · Poly6 k
 };
-static_assert(sizeof(Constants) == kPushConstantBytes, "shaders/common.glsl's push-constant block is 128 bytes");
+static_assert(sizeof(PbfDevice::Constants) == kPushConstantBytes, "shaders/common.glsl's push-constant block is 128 bytes");
+
+namespace {
+
+using Constants = PbfDevice::Constants;
 
 Constants make_constants(const GridSpec& g, std::size_t n, const sim::PbfLambdaConsts* lk, const sim::PbfDeltaConsts* dk) {
   Constants c{};
@@ -91,6 +93,7 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->lambda_, DeviceBuffer::create(ctx, u));
   FF_TRY(d->x_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->vel_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->check_, DeviceBuffer::create(ctx, 8));
   FF_TRY(d->count_k_, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&d->pos_, &d->cell_, &d->count_}));
   FF_TRY(d->scan_k_, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&d->count_, &d->start_}));
   FF_TRY(d->scatter_k_, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(),
@@ -103,6 +106,7 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->next_}));
   FF_TRY(d->update_k_, Kernel::create(ctx, "pbf_update", shaders::pbf_update(), {&d->pos_, &d->x_, &d->vel_}));
+  FF_TRY(d->check_k_, Kernel::create(ctx, "frame_check", shaders::frame_check(), {&d->x_, &d->vel_, &d->check_}));
   if (ctx.timestamp_valid_bits() > 0 && ctx.timestamp_period_ns() > 0.0f) {
     VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -254,6 +258,29 @@ Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const 
   return {};
 }
 
+template <class Stamp>
+void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, int iterations,
+                               Stamp&& stamp) const {
+  stamp(cb);
+  // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
+  const VkBufferCopy all{0, 0, n_ * 16};
+  vkCmdCopyBuffer(cb, x_.handle(), pos_.handle(), 1, &all);
+  compute_barrier(cb);
+  record_grid(cb, &c);
+  stamp(cb);
+  lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
+  compute_barrier(cb);
+  force_k_.dispatch(cb, &cf, groups(n_, 128));
+  compute_barrier(cb);
+  vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // x* from the prediction
+  compute_barrier(cb);
+  stamp(cb);
+  record_sweeps(cb, &c, iterations, stamp);
+  update_k_.dispatch(cb, &cf, groups(n_, 256));
+  compute_barrier(cb);
+  stamp(cb);
+}
+
 Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                           int iterations, PassTimes* times) {
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
@@ -268,26 +295,46 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   };
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
-    stamp(cb);
-    // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
-    const VkBufferCopy all{0, 0, n_ * 16};
-    vkCmdCopyBuffer(cb, x_.handle(), pos_.handle(), 1, &all);
-    compute_barrier(cb);
-    record_grid(cb, &c);
-    stamp(cb);
-    lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
-    compute_barrier(cb);
-    force_k_.dispatch(cb, &cf, groups(n_, 128));
-    compute_barrier(cb);
-    vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // x* from the prediction
-    compute_barrier(cb);
-    stamp(cb);
-    record_sweeps(cb, &c, iterations, stamp);
-    update_k_.dispatch(cb, &cf, groups(n_, 256));
-    compute_barrier(cb);
-    stamp(cb);
+    record_substep(cb, c, cf, iterations, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
+}
+
+Result<PbfDevice::Check> PbfDevice::check() {
+  const Constants c = make_constants(grid_, n_, nullptr, nullptr);
+  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    vkCmdFillBuffer(cb, check_.handle(), 0, 4, 0);               // max |v|² bits: 0 is +0.0
+    vkCmdFillBuffer(cb, check_.handle(), 4, 4, 0xFFFFFFFFu);     // no bad particle
+    compute_barrier(cb);
+    check_k_.dispatch(cb, &c, groups(n_, 256));
+  }));
+  std::uint32_t r[2];
+  FF_CHECK(check_.download(r, sizeof r));
+  float v2;
+  std::memcpy(&v2, &r[0], sizeof v2);
+  return Check{std::sqrt(static_cast<double>(v2)), r[1] == 0xFFFFFFFFu ? n_ : static_cast<std::size_t>(r[1])};
+}
+
+Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double frame_dt) {
+  const auto blown = [](std::size_t i, int step) {
+    return numerical_error(fmt::format("simulation blew up in sub-step {} on the GPU: particle {} has a non-finite "
+                                       "position or velocity", step, i));
+  };
+  FF_TRY(const Check before, check());
+  if (before.first_bad < n_) return blown(before.first_bad, 0);
+  const sim::SubstepPlan plan = sim::plan_substeps(solver.params(), before.max_speed, frame_dt);
+  const sim::PbfLambdaConsts lk = solver.lambda_consts();
+  const sim::PbfDeltaConsts dk = solver.delta_consts();
+  const sim::PbfForceConsts fk = solver.force_consts(plan.dt);
+  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  const Constants cf = force_constants(c, fk);
+  // Every sub-step in one submission: the device runs the frame without waiting for the host.
+  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, solver.params().iterations, [](VkCommandBuffer) {});
+  }));
+  FF_TRY(const Check after, check());
+  if (after.first_bad < n_) return blown(after.first_bad, plan.steps);
+  return DeviceFrame{plan.steps, plan.dt, plan.capped, before.max_speed};
 }
 
 Status PbfDevice::lambda_only(const sim::PbfLambdaConsts& lk) {

@@ -17,6 +17,7 @@
 #include "gpu/context.h"
 #include "gpu/kernel.h"
 #include "sim/pbf_kernels.h"
+#include "sim/pbf_solver.h"
 
 #include <array>
 #include <cstdint>
@@ -46,8 +47,18 @@ struct PassTimes {
   double total() const { return grid + force + lambda + delta + copy + update; }
 };
 
+/// What one output frame on the device did (sim::FrameStats' counterpart, so far without the density error).
+struct DeviceFrame {
+  int substeps = 0;
+  float dt = 0;
+  bool capped = false;     ///< CFL wanted more than max_substeps
+  double max_speed = 0;    ///< m/s at the start of the frame, from which the sub-steps were planned
+};
+
 class PbfDevice {
  public:
+  struct Constants;  ///< the passes' push-constant block (defined in pbf_device.cpp)
+
   /// Buffers and kernels for `n` particles (n ≥ 1) on `grid`; `ctx` must outlive the PbfDevice.
   static Result<std::unique_ptr<PbfDevice>> create(Context& ctx, std::size_t n, const GridSpec& grid);
 
@@ -65,6 +76,17 @@ class PbfDevice {
   /// x = x*. One submission; waits for it.
   Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                  int iterations, PassTimes* times = nullptr);
+  /// One output frame of `frame_dt` seconds in equal sub-steps planned as the CPU plans them (sim::plan_substeps on
+  /// the largest speed, reduced on the device), each a substep() with `solver`'s constants and a fixed
+  /// params().iterations sweeps. A non-finite position or velocity, before or after the frame, is an Error naming
+  /// the lowest such particle index.
+  Result<DeviceFrame> advance(const sim::PbfSolver& solver, double frame_dt);
+  /// The largest |v| of the state, m/s, and the lowest index with a non-finite x or v (none: size()).
+  struct Check {
+    double max_speed = 0;
+    std::size_t first_bad = 0;
+  };
+  Result<Check> check();
   /// The grid of the last solve: start (cells + 1 offsets into items) and items (particle indices by cell, then
   /// by index).
   Status get_grid(std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& items) const;
@@ -87,14 +109,16 @@ class PbfDevice {
   void record_grid(VkCommandBuffer cb, const void* constants) const;
   // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed).
   template <class Stamp>
+  void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, int iterations, Stamp&& stamp) const;
+  template <class Stamp>
   void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp) const;
   Status read_times(int iterations, bool with_force, PassTimes& times) const;
 
   Context* ctx_ = nullptr;
   std::size_t n_ = 0;
   GridSpec grid_;
-  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_;
-  Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, update_k_;
+  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_;
+  Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, update_k_, check_k_;
   VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 4 + 3·kMaxTimedIterations queries
   static constexpr int kMaxTimedIterations = 64;
 };

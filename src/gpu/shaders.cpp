@@ -53,4 +53,11 @@ std::span<const std::uint32_t> pbf_update() {
   return kWords;
 }
 
+std::span<const std::uint32_t> frame_check() {
+  static constexpr std::uint32_t kWords[] = {
+#include "frame_check.inc"
+  };
+  return kWords;
+}
+
 }  // namespace ff::gpu::shaders

@@ -13,5 +13,6 @@ std::span<const std::uint32_t> pbf_lambda();
 std::span<const std::uint32_t> pbf_delta();
 std::span<const std::uint32_t> pbf_force();
 std::span<const std::uint32_t> pbf_update();
+std::span<const std::uint32_t> frame_check();
 
 }  // namespace ff::gpu::shaders

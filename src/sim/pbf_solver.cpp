@@ -462,6 +462,21 @@ void PbfSolver::substep(ParticleSet& p, double time, float dt, Controller& contr
   }
 }
 
+SubstepPlan plan_substeps(const SolverParams& params, double max_speed, double frame_dt) {
+  const double v_est = max_speed + params.gravity.norm() * frame_dt;
+  // and at most the capillary condition's sub-step (explicit surface tension is unstable above it).
+  const double dt_cfl =
+      std::min(double(cfl_dt(static_cast<float>(v_est), params.spacing(), params.cfl, params.max_dt)), params.capillary_dt());
+  SubstepPlan plan;
+  plan.steps = std::max(static_cast<int>(std::ceil(frame_dt / dt_cfl - 1e-9)), 1);
+  if (plan.steps > params.max_substeps) {
+    plan.steps = params.max_substeps;
+    plan.capped = true;
+  }
+  plan.dt = static_cast<float>(frame_dt / plan.steps);
+  return plan;
+}
+
 Result<FrameStats> PbfSolver::advance(ParticleSet& p, double time, double frame_dt, Controller& controller) {
   FrameStats stats;
   const auto n = static_cast<std::int64_t>(p.size());
@@ -469,17 +484,10 @@ Result<FrameStats> PbfSolver::advance(ParticleSet& p, double time, double frame_
   const double vmax = std::sqrt(core::deterministic_max(n, 0.0, [&](std::int64_t i) {
     return static_cast<double>(p.velocity[static_cast<std::size_t>(i)].squaredNorm());
   }));
-  const double v_est = vmax + params_.gravity.norm() * frame_dt;
-  // and at most the capillary condition's sub-step (explicit surface tension is unstable above it).
-  const double dt_cfl =
-      std::min(double(cfl_dt(static_cast<float>(v_est), params_.spacing(), params_.cfl, params_.max_dt)), params_.capillary_dt());
-  int steps = static_cast<int>(std::ceil(frame_dt / dt_cfl - 1e-9));
-  steps = std::max(steps, 1);
-  if (steps > params_.max_substeps) {
-    steps = params_.max_substeps;
-    stats.substeps_capped = true;
-  }
-  const float dt = static_cast<float>(frame_dt / steps);
+  const SubstepPlan plan = plan_substeps(params_, vmax, frame_dt);
+  const int steps = plan.steps;
+  const float dt = plan.dt;
+  stats.substeps_capped = plan.capped;
   // A blow-up stops the run naming a bad particle. The state is checked before stepping and after every
   // sub-step, so the named particle is one where the NaN/Inf appeared, before neighbours spread it further
   // (lowest id among those, so the message is deterministic).

@@ -52,6 +52,15 @@ struct FrameStats {
   StageTimes times;
 };
 
+/// The sub-steps of one output frame (CFL on the fastest particle, allowing for gravity's speed-up over the frame,
+/// and at most the capillary sub-step), as PbfSolver::advance and the GPU path (gpu/pbf_device.h) both take them.
+struct SubstepPlan {
+  int steps = 1;
+  float dt = 0;
+  bool capped = false;  ///< CFL wanted more than max_substeps
+};
+SubstepPlan plan_substeps(const SolverParams& params, double max_speed, double frame_dt);
+
 class PbfSolver {
  public:
   PbfSolver(const SolverParams& params, const Domain& domain);

@@ -292,5 +292,66 @@ TEST(GpuPbf, SubstepsTrackTheCpuSolver) {
   expect_silent(*ctx);
 }
 
+// Whole frames: the sub-steps planned from the largest speed (reduced on the device) as the CPU plans them.
+TEST(GpuPbf, FramesTakeTheCpuSubstepsAndTrackItsPositions) {
+  sim::SolverParams sp;
+  sp.particle_radius = 0.008f;
+  sp.surface_tension = 0.0f, sp.drag = 0.0f, sp.vorticity = 0.0f;
+  const sim::Domain dom{Vec3f::Zero(), Vec3f(0.5f, 0.5f, 0.8f)};
+  const sim::ParticleSet start = dropped_block(sp, dom);
+  sp.max_iterations = sp.iterations;
+  sim::ParticleSet cpu = start;
+  sim::PbfSolver solver(sp, dom);
+  solver.set_cluster_kernels(true);
+  sim::NoController none;
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
+  for (int f = 0; f < 2; ++f) {
+    auto c = solver.advance(cpu, 0.2 + f / 60.0, 1.0 / 60.0, none);
+    ASSERT_TRUE(c.has_value());
+    auto g = (*dev)->advance(solver, 1.0 / 60.0);
+    ASSERT_TRUE(g.has_value()) << g.error().message;
+    std::printf("frame %d: CPU %d sub-steps of %.5f s, GPU %d of %.5f s (largest speed %.3f m/s)\n", f, c->substeps, c->dt,
+                g->substeps, double(g->dt), g->max_speed);
+    EXPECT_EQ(g->substeps, c->substeps);
+    EXPECT_FLOAT_EQ(g->dt, static_cast<float>(c->dt));
+  }
+  std::vector<Vec3f> x, v;
+  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  const auto gx = by_id(start, x), cx = by_id(cpu, cpu.position);
+  std::vector<double> dx(gx.size());
+  for (std::size_t i = 0; i < gx.size(); ++i) dx[i] = (gx[i] - cx[i]).norm() / sp.spacing();
+  std::sort(dx.begin(), dx.end());
+  std::printf("after 2 frames: GPU − CPU |Δx|/d median %.2e, 99th %.2e, largest %.2e\n", dx[dx.size() / 2],
+              dx[dx.size() * 99 / 100], dx.back());
+  // Float differences grow over a frame's sub-steps (a splash is chaotic), so the bound is on the bulk.
+  EXPECT_LT(dx[dx.size() / 2], 1e-3);
+  EXPECT_LT(dx[dx.size() * 9 / 10], 1e-2);
+  expect_silent(*ctx);
+}
+
+TEST(GpuPbf, ABlowUpNamesTheParticle) {
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  sim::SolverParams sp;
+  sp.particle_radius = 0.01f;
+  const sim::Domain dom{Vec3f::Zero(), Vec3f::Ones()};
+  const sim::PbfSolver solver(sp, dom);
+  std::vector<Vec3f> x(100), v(100, Vec3f::Zero());
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = Vec3f(0.1f + 0.02f * float(i % 10), 0.1f + 0.02f * float(i / 10), 0.5f);
+  v[37] = Vec3f(0.0f, std::nanf(""), 0.0f);
+  v[61] = Vec3f(INFINITY, 0.0f, 0.0f);
+  auto dev = PbfDevice::create(*ctx, x.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value());
+  ASSERT_TRUE((*dev)->set_state(x, v).ok());
+  auto f = (*dev)->advance(solver, 1.0 / 60.0);
+  ASSERT_FALSE(f.has_value());
+  EXPECT_NE(f.error().message.find("particle 37 "), std::string::npos) << f.error().message;
+  expect_silent(*ctx);
+}
+
 }  // namespace
 }  // namespace ff::gpu
