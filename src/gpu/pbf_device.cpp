@@ -94,6 +94,7 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->x_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->vel_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->check_, DeviceBuffer::create(ctx, 8));
+  FF_TRY(d->accel_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->count_k_, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&d->pos_, &d->cell_, &d->count_}));
   FF_TRY(d->scan_k_, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&d->count_, &d->start_}));
   FF_TRY(d->scatter_k_, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(),
@@ -104,7 +105,8 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->delta_k_, Kernel::create(ctx, "pbf_delta", shaders::pbf_delta(),
                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->lambda_, &d->next_}));
   FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
-                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->next_}));
+                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->accel_}));
+  FF_TRY(d->predict_k_, Kernel::create(ctx, "pbf_predict", shaders::pbf_predict(), {&d->x_, &d->vel_, &d->accel_, &d->pos_}));
   FF_TRY(d->update_k_, Kernel::create(ctx, "pbf_update", shaders::pbf_update(), {&d->pos_, &d->x_, &d->vel_}));
   FF_TRY(d->check_k_, Kernel::create(ctx, "frame_check", shaders::frame_check(), {&d->x_, &d->vel_, &d->check_}));
   if (ctx.timestamp_valid_bits() > 0 && ctx.timestamp_period_ns() > 0.0f) {
@@ -122,7 +124,7 @@ PbfDevice::~PbfDevice() {
 
 std::size_t PbfDevice::bytes() const {
   return pos_.bytes() + next_.bytes() + cell_.bytes() + count_.bytes() + start_.bytes() + items_.bytes() +
-         density_.bytes() + lambda_.bytes() + x_.bytes() + vel_.bytes();
+         density_.bytes() + lambda_.bytes() + x_.bytes() + vel_.bytes() + accel_.bytes();
 }
 
 Status PbfDevice::set_predicted(std::span<const Vec3f> x) {
@@ -174,9 +176,10 @@ void PbfDevice::record_grid(VkCommandBuffer cb, const void* constants) const {
 }
 
 template <class Stamp>
-void PbfDevice::record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp) const {
+void PbfDevice::record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp, float dt) const {
   const VkBufferCopy all{0, 0, n_ * 16};
   for (int it = 0; it < iterations; ++it) {
+    if (controller_ && dt > 0.0f) controller_->record_correction(cb, it, dt);
     lambda_k_.dispatch(cb, constants, groups(n_, 128));
     compute_barrier(cb);
     stamp(cb);
@@ -230,7 +233,7 @@ Status PbfDevice::solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConst
     stamp(cb);
     record_grid(cb, &c);
     stamp(cb);
-    record_sweeps(cb, &c, iterations, stamp);
+    record_sweeps(cb, &c, iterations, stamp, 0.0f);  // a bare solve: no controller
   }));
   return timed ? read_times(iterations, false, *times) : Status{};
 }
@@ -268,14 +271,17 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   compute_barrier(cb);
   record_grid(cb, &c);
   stamp(cb);
+  const float dt = cf.k2[3];
+  if (controller_) controller_->record_begin(cb, dt);
   lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
   compute_barrier(cb);
   force_k_.dispatch(cb, &cf, groups(n_, 128));
   compute_barrier(cb);
-  vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // x* from the prediction
+  if (controller_) controller_->record_accelerations(cb, dt);
+  predict_k_.dispatch(cb, &cf, groups(n_, 256));  // x* (the x buffer was copied into it for the grid)
   compute_barrier(cb);
   stamp(cb);
-  record_sweeps(cb, &c, iterations, stamp);
+  record_sweeps(cb, &c, iterations, stamp, dt);
   update_k_.dispatch(cb, &cf, groups(n_, 256));
   compute_barrier(cb);
   stamp(cb);
@@ -298,6 +304,35 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
     record_substep(cb, c, cf, iterations, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
+}
+
+Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& points, std::size_t count) const {
+  if (count == 0) return param_error("GPU grid: no points");
+  Context& ctx = *ctx_;
+  PointGrid g;
+  FF_TRY(g.cell, DeviceBuffer::create(ctx, count * 4));
+  FF_TRY(g.count, DeviceBuffer::create(ctx, grid_.cells() * 4));
+  FF_TRY(g.start, DeviceBuffer::create(ctx, (grid_.cells() + 1) * 4));
+  FF_TRY(g.items, DeviceBuffer::create(ctx, count * 4));
+  FF_TRY(Kernel count_k, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&points, &g.cell, &g.count}));
+  FF_TRY(Kernel scan_k, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&g.count, &g.start}));
+  FF_TRY(Kernel scatter_k, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(), {&g.cell, &g.start, &g.count, &g.items}));
+  FF_TRY(Kernel order_k, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&g.start, &g.items}));
+  const Constants c = make_constants(grid_, count, nullptr, nullptr);
+  FF_CHECK(ctx.submit_and_wait([&](VkCommandBuffer cb) {
+    vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
+    compute_barrier(cb);
+    count_k.dispatch(cb, &c, groups(count, 256));
+    compute_barrier(cb);
+    scan_k.dispatch(cb, &c, 1);
+    compute_barrier(cb);
+    vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
+    compute_barrier(cb);
+    scatter_k.dispatch(cb, &c, groups(count, 256));
+    compute_barrier(cb);
+    order_k.dispatch(cb, &c, groups(grid_.cells(), 256));
+  }));
+  return g;
 }
 
 Result<PbfDevice::Check> PbfDevice::check() {

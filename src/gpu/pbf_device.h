@@ -55,6 +55,18 @@ struct DeviceFrame {
   double max_speed = 0;    ///< m/s at the start of the frame, from which the sub-steps were planned
 };
 
+/// A shape controller's passes on the device, recorded into a sub-step at the solver's hook points (sim/controller.h).
+class DeviceController {
+ public:
+  virtual ~DeviceController() = default;
+  /// After the grid on x (begin_step).
+  virtual void record_begin(VkCommandBuffer cb, float dt) const = 0;
+  /// After the forces, before the prediction: the accelerations buffer may be changed (add_accelerations).
+  virtual void record_accelerations(VkCommandBuffer cb, float dt) const = 0;
+  /// Before sweep `iteration` of the density constraint, on x* (correct_positions).
+  virtual void record_correction(VkCommandBuffer cb, int iteration, float dt) const = 0;
+};
+
 class PbfDevice {
  public:
   struct Constants;  ///< the passes' push-constant block (defined in pbf_device.cpp)
@@ -71,8 +83,8 @@ class PbfDevice {
   /// The particles' state between sub-steps: positions x and velocities v (n each).
   Status set_state(std::span<const Vec3f> x, std::span<const Vec3f> v);
   Status get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const;
-  /// One sub-step of the state (sim::PbfSolver::substep without a controller, surface tension, drag or vorticity,
-  /// and with a fixed sweep count): the grid on x, ρ(x), the forces and x*, `iterations` sweeps, v = (x* − x)/Δt and
+  /// One sub-step of the state (sim::PbfSolver::substep with the controller of set_controller(), without surface
+  /// tension, drag or vorticity, and with a fixed sweep count): the grid on x, ρ(x), the forces and x*, `iterations` sweeps, v = (x* − x)/Δt and
   /// x = x*. One submission; waits for it.
   Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                  int iterations, PassTimes* times = nullptr);
@@ -98,6 +110,25 @@ class PbfDevice {
   /// One λ pass at x* on the grid of the last solve (density and λ only, x* unchanged).
   Status lambda_only(const sim::PbfLambdaConsts& lk);
 
+  /// Points (vec4 each, `count` of them) sorted into this device's grid, as the fluid is: each point's cell, the
+  /// cells' runs (start: cells + 1) and the points by cell, then index. For samples that do not move.
+  struct PointGrid {
+    DeviceBuffer cell, count, start, items;
+  };
+  Result<PointGrid> sort_into_grid(const DeviceBuffer& points, std::size_t count) const;
+  /// The controller whose passes every later sub-step records (null: none); it must outlive its use here.
+  void set_controller(const DeviceController* controller) { controller_ = controller; }
+  // What a DeviceController binds: the state, the accelerations, and the grid on x of the current sub-step.
+  const DeviceBuffer& x_buffer() const { return x_; }
+  const DeviceBuffer& predicted_buffer() const { return pos_; }
+  const DeviceBuffer& velocity_buffer() const { return vel_; }
+  const DeviceBuffer& acceleration_buffer() const { return accel_; }
+  const DeviceBuffer& cell_buffer() const { return cell_; }
+  const DeviceBuffer& start_buffer() const { return start_; }
+  const DeviceBuffer& items_buffer() const { return items_; }
+  const GridSpec& grid() const { return grid_; }
+  Context& context() const { return *ctx_; }
+
   /// Device memory held, in bytes.
   std::size_t bytes() const;
   /// Whether the device's queue has timestamps (solve() then fills PassTimes).
@@ -107,18 +138,20 @@ class PbfDevice {
  private:
   PbfDevice() = default;
   void record_grid(VkCommandBuffer cb, const void* constants) const;
-  // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed).
+  // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed). With dt > 0
+  // the controller's correction comes before each sweep.
   template <class Stamp>
   void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, int iterations, Stamp&& stamp) const;
   template <class Stamp>
-  void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp) const;
+  void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp, float dt) const;
   Status read_times(int iterations, bool with_force, PassTimes& times) const;
 
   Context* ctx_ = nullptr;
   std::size_t n_ = 0;
   GridSpec grid_;
-  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_;
-  Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, update_k_, check_k_;
+  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_, accel_;
+  Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, predict_k_, update_k_, check_k_;
+  const DeviceController* controller_ = nullptr;
   VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 4 + 3·kMaxTimedIterations queries
   static constexpr int kMaxTimedIterations = 64;
 };

@@ -59,5 +59,47 @@ std::span<const std::uint32_t> frame_check() {
   };
   return kWords;
 }
+std::span<const std::uint32_t> pbf_predict() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_predict.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_fill() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_fill.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_bonds() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_bonds.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_accel() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_accel.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_spring() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_spring.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_lambda() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_lambda.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_correct() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_correct.inc"
+  };
+  return kWords;
+}
 
 }  // namespace ff::gpu::shaders

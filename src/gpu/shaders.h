@@ -14,5 +14,12 @@ std::span<const std::uint32_t> pbf_delta();
 std::span<const std::uint32_t> pbf_force();
 std::span<const std::uint32_t> pbf_update();
 std::span<const std::uint32_t> frame_check();
+std::span<const std::uint32_t> pbf_predict();
+std::span<const std::uint32_t> ctl_fill();
+std::span<const std::uint32_t> ctl_bonds();
+std::span<const std::uint32_t> ctl_accel();
+std::span<const std::uint32_t> ctl_spring();
+std::span<const std::uint32_t> ctl_lambda();
+std::span<const std::uint32_t> ctl_correct();
 
 }  // namespace ff::gpu::shaders

@@ -1,6 +1,9 @@
 // What every pass of the PBF sub-step shares: the push constants (one block for all passes, 128 bytes, the least
 // every Vulkan device offers) and the uniform grid's cell of a position. The host fills the block from
 // gpu::PassConstants (gpu/pbf_device.h); the two layouts are checked against each other by a static_assert there.
+// A pass with a block of its own (the controller's, control.glsl) defines FF_OWN_CONSTANTS and declares it as C,
+// beginning with the same grid_lo and grid_dims.
+#ifndef FF_OWN_CONSTANTS
 layout(push_constant) uniform Constants {
   vec4 grid_lo;      // xyz: the grid's lower corner, w: 1 / cell edge
   ivec4 grid_dims;   // xyz: cells per axis, w: particle count n
@@ -12,6 +15,7 @@ layout(push_constant) uniform Constants {
   vec4 wall_hi;      // xyz: the walls' upper corner
   vec4 k3;           // force pass: x: XSPH η/Δt, y: m · Poly6 k
 } C;
+#endif
 
 uint grid_cells() { return uint(C.grid_dims.x) * uint(C.grid_dims.y) * uint(C.grid_dims.z); }
 

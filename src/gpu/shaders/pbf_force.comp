@@ -1,8 +1,8 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// The sub-step's forces and prediction (sim/pbf_solver.cpp: xsph_accelerations and the prediction of substep()), at
-// x on the grid built on x: a = g + (η/Δt) Σ_j (m/ρ_j) W_ij (v_j − v_i) (XSPH as an acceleration, METHOD.md §c.2),
-// v* = v + Δt a, x* = clamp(x + Δt v*) into the walls. Reads x (pos), v and ρ(x); writes only its own x* (next).
+// The sub-step's forces (sim/pbf_solver.cpp: xsph_accelerations), at x on the grid built on x:
+// a = g + (η/Δt) Σ_j (m/ρ_j) W_ij (v_j − v_i) (XSPH as an acceleration, METHOD.md §c.2). Reads x (pos), v and ρ(x);
+// writes only its own a. A controller's accelerations come next (ctl_accel.comp), then pbf_predict.comp.
 layout(local_size_x = 128) in;
 #include "common.glsl"
 layout(std430, binding = 0) readonly buffer Pos { vec4 pos[]; };
@@ -11,14 +11,14 @@ layout(std430, binding = 2) readonly buffer Start { uint start[]; };
 layout(std430, binding = 3) readonly buffer Items { uint items[]; };
 layout(std430, binding = 4) readonly buffer Vel { vec4 vel[]; };
 layout(std430, binding = 5) readonly buffer Density { float density[]; };
-layout(std430, binding = 6) writeonly buffer Next { vec4 next[]; };
+layout(std430, binding = 6) writeonly buffer Accel { vec4 accel[]; };
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= uint(C.grid_dims.w)) return;
   const float h2 = C.k0.y;
   const vec3 g = C.k2.xyz;
-  const float dt = C.k2.w, xsph = C.k3.x, mk = C.k3.y;
+  const float xsph = C.k3.x, mk = C.k3.y;
   const vec3 xi = pos[i].xyz, vi = vel[i].xyz;
   vec3 s = vec3(0.0);
   if (xsph != 0.0) {
@@ -39,7 +39,5 @@ void main() {
           }
         }
   }
-  const vec3 a = g + xsph * s;
-  const vec3 vs = vi + dt * a;
-  next[i] = vec4(clamp(xi + dt * vs, C.wall_lo.xyz, C.wall_hi.xyz), 0.0);
+  accel[i] = vec4(g + xsph * s, 0.0);
 }

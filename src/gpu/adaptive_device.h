@@ -1,0 +1,69 @@
+#pragma once
+// The paper's controller (control/adaptive.h, METHOD.md §a.2–§a.6) on the device, recorded into PbfDevice's
+// sub-steps (issue 45). Per sub-step, on the grid of the fluid at x:
+//   begin          per sample: ρ_p at x, the fill ratio and the bond radius H_c* (ctl_fill); per fluid particle: its
+//                  nearest bonded sample, i.e. whether it is controlled (ctl_bonds)
+//   accelerations  boundary correction and speed limit of controlled fluid (ctl_accel)
+//   each sweep     the spring in the first (ctl_spring); per sample λ of the unilateral density constraint at x*
+//                  (ctl_lambda); per controlled particle Δx over its bonds (ctl_correct)
+// Bonds are never stored: a particle's bonds are the samples of its target within H_c*,i of it at the start of the
+// sub-step, and the passes that walk them find them again in the samples' grid (the same cells as the fluid's).
+// Every pass is a gather in a fixed order, so two runs give the same bits.
+//
+// So far (the rest is issue 45's): static targets that act from the start at full strength, without the gather
+// steering (AdaptiveParams::gather) and without kinematic corrections. create() says which of these a scene asks for.
+#include "control/adaptive_params.h"
+#include "control/control_context.h"
+#include "control/control_samples.h"
+#include "control/control_targets.h"
+#include "core/error.h"
+#include "gpu/kernel.h"
+#include "gpu/pbf_device.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace ff::gpu {
+
+class AdaptiveDevice final : public DeviceController {
+ public:
+  /// The controller of `targets` for the fluid of `fluid` (which must outlive it); one-line errors for what the
+  /// device does not do yet.
+  static Result<std::unique_ptr<AdaptiveDevice>> create(PbfDevice& fluid, std::vector<control::ControlTarget> targets,
+                                                        const control::ControlContext& ctx,
+                                                        const control::AdaptiveParams& params);
+  /// Each fluid particle's target (sim::ParticleSet::target), in the fluid's order.
+  Status set_fluid_targets(std::span<const std::uint8_t> target);
+  /// Per fluid particle, its nearest bonded sample as an index into the targets' concatenated sets
+  /// (sim::ParticleSet::bound_control), kInvalidIndex when not controlled: of the last sub-step.
+  Status get_bound(std::vector<Index>& bound) const;
+  /// Per sample (in the targets' concatenated order), its fill ratio ρ_p/ρ_c at the start of the last sub-step.
+  Status get_fill(std::vector<float>& fill) const;
+  std::size_t samples() const { return m_; }
+
+  void record_begin(VkCommandBuffer cb, float dt) const override;
+  void record_accelerations(VkCommandBuffer cb, float dt) const override;
+  void record_correction(VkCommandBuffer cb, int iteration, float dt) const override;
+
+  struct Constants;  ///< the control passes' push-constant block (adaptive_device.cpp)
+
+ private:
+  AdaptiveDevice() = default;
+  Constants constants(float dt) const;
+
+  PbfDevice* fluid_ = nullptr;
+  control::AdaptiveParams params_;
+  control::ControlContext ctx_;
+  std::size_t m_ = 0;
+  float hc_ = 0, eps_c_ = 0, g_ref_ = 0;
+  bool multi_ = false;
+  std::vector<Index> original_;  // sample k on the device is original_[k] in the concatenated sets
+  DeviceBuffer s_pos_, s_normal_, s_rho_c_, s_phi_, s_target_;
+  PbfDevice::PointGrid s_grid_;  // the samples in the fluid grid's cells
+  DeviceBuffer s_fill_, s_bond_r2_, s_coef_, f_target_, nearest_;
+  Kernel fill_k_, bonds_k_, accel_k_, spring_k_, lambda_k_, correct_k_;
+};
+
+}  // namespace ff::gpu

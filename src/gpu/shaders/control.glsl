@@ -1,0 +1,22 @@
+// The adaptive controller's passes (control/adaptive.cpp is the CPU reference; gpu/adaptive_device.h): their
+// push-constant block, the sample buffers every pass binds at the same slots, and the loop over the grid cells
+// within H_c of a cell.
+#define FF_OWN_CONSTANTS
+layout(push_constant) uniform ControlConstants {
+  vec4 grid_lo;     // as common.glsl
+  ivec4 grid_dims;  // xyz cells, w: fluid particles n
+  vec4 c0;          // H_c, H_c², Poly6 k at H_c, Spiky kgrad at H_c
+  vec4 c1;          // m_p, ε_c, α, the largest |Δx| per iteration
+  vec4 c2;          // γ of the spring (scaled to Δt), |n| threshold of the boundary correction, speed limit, Δt
+  ivec4 c3;         // samples m, reach in cells (⌈H_c / cell⌉), bond radius rule (0 over-full, 1 paper, 2 none),
+                    // 1 when there are several targets
+} C;
+#include "common.glsl"
+
+// Every cell within `reach` cells of c on each axis, clamped to the grid: a box of cells covering the ball of H_c.
+#define FOR_CELLS_AROUND(c, reach, CELL)                                                              \
+  for (int dz = max(c.z - reach, 0); dz <= min(c.z + reach, C.grid_dims.z - 1); ++dz)                 \
+    for (int dy = max(c.y - reach, 0); dy <= min(c.y + reach, C.grid_dims.y - 1); ++dy)               \
+      for (int dx = max(c.x - reach, 0); dx <= min(c.x + reach, C.grid_dims.x - 1); ++dx) {            \
+        const uint CELL = cell_index(ivec3(dx, dy, dz));
+#define END_FOR_CELLS }

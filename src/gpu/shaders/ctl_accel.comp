@@ -1,0 +1,33 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Adaptive control on the accelerations of controlled fluid (control/adaptive.cpp, add_accelerations; static
+// targets): the boundary correction (eq. 15–16: where the nearest bonded sample's normal n is strong, the outward
+// part of a is removed), then the speed limit (v* = v + Δt a brought back to the limit through a).
+layout(local_size_x = 256) in;
+#include "control.glsl"
+layout(std430, binding = 0) readonly buffer Nearest { uint nearest[]; };
+layout(std430, binding = 1) readonly buffer SNormal { vec4 s_normal[]; };
+layout(std430, binding = 2) readonly buffer Vel { vec4 vel[]; };
+layout(std430, binding = 3) buffer Accel { vec4 accel[]; };
+
+void main() {
+  const uint j = gl_GlobalInvocationID.x;
+  if (j >= uint(C.grid_dims.w)) return;
+  const uint i = nearest[j];
+  if (i == 0xFFFFFFFFu) return;
+  vec3 a = accel[j].xyz;
+  const float thr = C.c2.y, vmax = C.c2.z, dt = C.c2.w;
+  if (thr >= 0.0) {  // < 0: no boundary correction
+    const vec3 nrm = s_normal[i].xyz;
+    const float len = length(nrm);
+    if (len >= thr && len != 0.0) {
+      const vec3 nh = nrm / len;
+      const float outward = dot(nh, a);
+      if (outward > 0.0) a -= outward * nh;
+    }
+  }
+  const vec3 vs = vel[j].xyz + dt * a;
+  const float s2 = dot(vs, vs);
+  if (s2 > vmax * vmax) a += (vs * (vmax / sqrt(s2)) - vs) / dt;
+  accel[j] = vec4(a, 0.0);
+}

@@ -1,0 +1,138 @@
+// The adaptive controller on the device (gpu/adaptive_device.h) against the CPU controller (control/adaptive.h) on
+// the controller tests' sphere (tests/control/control_cases.h): fluid that has flowed into the target, one frame
+// from the same state on both, positions and which particles are controlled (and by which sample); lavapipe in CI,
+// validation layer on.
+#include "control/adaptive.h"
+#include "control/control_cases.h"
+#include "control/registry.h"
+#include "gpu/adaptive_device.h"
+#include "gpu/context.h"
+#include "gpu/pbf_device.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+namespace ff::gpu {
+namespace {
+
+struct Scene {
+  test::Case c = test::sphere_case();
+  control::AdaptiveParams params;
+  control::ControlContext ctx;
+  Scene() {
+    c.sp.surface_tension = 0.0f, c.sp.drag = 0.0f, c.sp.vorticity = 0.0f;  // not on the device yet
+    c.sp.max_iterations = c.sp.iterations;                                    // a fixed sweep count on both
+    params.gather = false;                                                    // not on the device yet
+  }
+  std::vector<control::ControlTarget> targets() const {
+    std::vector<control::ControlTarget> t(1);
+    t[0].set = c.set;
+    return t;
+  }
+};
+
+std::vector<Vec3f> by_id(const sim::ParticleSet& p, std::span<const Vec3f> v) {
+  std::vector<Vec3f> out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[p.id[i]] = v[i];
+  return out;
+}
+
+TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
+  Scene s;
+  sim::ParticleSet p;
+  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
+  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
+  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  auto cpu_ctl = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+  ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
+  // The column falls into the sphere: after 40 frames most of it is held.
+  for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
+  const sim::ParticleSet start = p;
+  std::size_t held = 0;
+  for (Index b : start.bound_control) held += b != kInvalidIndex;
+  ASSERT_GT(held, start.size() / 2) << "the fluid should have reached the target";
+
+  ASSERT_TRUE(solver.advance(p, 40 / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
+
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  const GridSpec grid = GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value();
+  std::vector<Vec3f> free_x;  // the same frame without the controller: what the control changes
+  for (const bool controlled : {true, false}) {
+    auto dev = PbfDevice::create(**ctx, start.size(), grid);
+    ASSERT_TRUE(dev.has_value()) << dev.error().message;
+    ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
+    auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, s.params);
+    ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+    ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+    if (controlled) (*dev)->set_controller(ctl->get());
+    auto frame = (*dev)->advance(solver, 1.0 / 60.0);
+    ASSERT_TRUE(frame.has_value()) << frame.error().message;
+    std::vector<Vec3f> x, v;
+    ASSERT_TRUE((*dev)->get_state(x, v).ok());
+    const auto gx = by_id(start, x);
+    if (!controlled) {
+      free_x = gx;
+      continue;
+    }
+    const auto cx = by_id(p, p.position);
+    std::vector<double> dx(gx.size());
+    for (std::size_t i = 0; i < gx.size(); ++i) dx[i] = (gx[i] - cx[i]).norm() / s.c.sp.spacing();
+    std::sort(dx.begin(), dx.end());
+    std::vector<Index> bound;
+    ASSERT_TRUE((*ctl)->get_bound(bound).ok());
+    std::vector<Index> gb(bound.size()), cb(bound.size());
+    for (std::size_t i = 0; i < bound.size(); ++i) gb[start.id[i]] = bound[i], cb[p.id[i]] = p.bound_control[i];
+    std::size_t same_set = 0, same_sample = 0, controlled_cpu = 0;
+    for (std::size_t i = 0; i < gb.size(); ++i) {
+      same_set += (gb[i] == kInvalidIndex) == (cb[i] == kInvalidIndex);
+      same_sample += gb[i] == cb[i];
+      controlled_cpu += cb[i] != kInvalidIndex;
+    }
+    std::printf("%zu particles (%zu controlled), %d sub-steps: GPU − CPU |Δx|/d median %.2e, 90th %.2e, largest %.2e; "
+                "controlled alike %zu, same nearest sample %zu\n",
+                gx.size(), controlled_cpu, frame->substeps, dx[dx.size() / 2], dx[dx.size() * 9 / 10], dx.back(), same_set,
+                same_sample);
+    EXPECT_LT(dx[dx.size() / 2], 1e-3);
+    EXPECT_LT(dx[dx.size() * 9 / 10], 1e-2);
+    EXPECT_GE(same_set, gb.size() - gb.size() / 200);        // ≥ 99.5 %
+    EXPECT_GE(same_sample, gb.size() - gb.size() / 50);      // ≥ 98 %: a near tie may go either way
+  }
+  // The control moves the fluid far more than the two paths differ.
+  const auto cx = by_id(p, p.position);
+  std::vector<double> diff(cx.size());
+  for (std::size_t i = 0; i < cx.size(); ++i) diff[i] = (free_x[i] - cx[i]).norm() / s.c.sp.spacing();
+  std::sort(diff.begin(), diff.end());
+  const double moved = diff[diff.size() / 2];
+  std::printf("without the controller the frame ends |Δx|/d median %.2e from the CPU's controlled frame\n", moved);
+  EXPECT_GT(moved, 1e-2);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
+TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
+  Scene s;
+  auto ctx = Context::create({.device = -1, .validation = false});
+  ASSERT_TRUE(ctx.has_value());
+  const sim::PbfSolver solver(s.c.sp, s.c.dom);
+  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  auto dev = PbfDevice::create(**ctx, 100, GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value());
+  control::AdaptiveParams gather = s.params;
+  gather.gather = true;
+  auto a = AdaptiveDevice::create(**dev, s.targets(), s.ctx, gather);
+  ASSERT_FALSE(a.has_value());
+  EXPECT_NE(a.error().message.find("gather"), std::string::npos) << a.error().message;
+  auto moving = s.targets();
+  moving[0].motion.keys.resize(2);
+  moving[0].motion.keys[1].time = 1.0;
+  auto b = AdaptiveDevice::create(**dev, moving, s.ctx, s.params);
+  ASSERT_FALSE(b.has_value());
+  EXPECT_NE(b.error().message.find("moving target"), std::string::npos) << b.error().message;
+}
+
+}  // namespace
+}  // namespace ff::gpu
