@@ -21,6 +21,10 @@ class NearestSeedField {
   /// Index (into `points`) of the seed nearest to p's cell, or kInvalidIndex when there are no seeds.
   Index nearest(const Vec3f& p) const;
   bool empty() const { return empty_; }
+  /// The grid reset() chose (the GPU's field, gpu/adaptive_device.h, takes the same cells).
+  const Vec3f& lo() const { return lo_; }
+  float cell() const { return cell_; }
+  const Vec3i& dims() const { return dims_; }
 
  private:
   Vec3i cell_of(const Vec3f& p) const;

@@ -1,5 +1,6 @@
 #include "gpu/adaptive_device.h"
 
+#include "control/nearest_seed_field.h"
 #include "core/kernels.h"
 #include "gpu/shaders.h"
 #include "sampling/weights.h"
@@ -20,7 +21,8 @@ struct AdaptiveDevice::Constants {
   float c1[4];  // m_p, ε_c, α, the largest |Δx| per iteration
   float c2[4];  // γ (scaled to Δt), |n| threshold (< 0: no boundary correction), speed limit, Δt
   std::int32_t c3[4];  // samples, reach, bond radius rule, several targets
-  float pad[8];
+  float field_lo[4];           // the seed field: corner, 1 / cell
+  std::int32_t field_dims[4];  // cells per axis, targets
 };
 static_assert(sizeof(AdaptiveDevice::Constants) == kPushConstantBytes, "shaders/control.glsl's block, padded to 128 bytes");
 
@@ -37,7 +39,6 @@ std::vector<float> packed(std::span<const Vec3f> v) {
 
 // What the device does not do yet, as the one-line error of create(); empty when it does all the scene asks.
 std::string unsupported(const std::vector<control::ControlTarget>& targets, const control::AdaptiveParams& params) {
-  if (params.gather) return "the gather steering (controller.adaptive.gather: set it false)";
   if (params.kinematic) return "kinematic corrections (controller.adaptive.kinematic)";
   for (std::size_t t = 0; t < targets.size(); ++t) {
     const control::ControlTarget& c = targets[t];
@@ -118,7 +119,36 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   FF_TRY(a->correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
                                        {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
                                         &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos}));
+  if (params.gather) FF_CHECK(a->make_seed_field(samples.targets()));
   return a;
+}
+
+// The seed field over the domain at the CPU field's cells, the samples sorted into them, and the flood's jumps.
+Status AdaptiveDevice::make_seed_field(std::size_t targets) {
+  control::NearestSeedField cpu;
+  cpu.reset(ctx_.domain.min, ctx_.domain.max, hc_);
+  field_.lo = cpu.lo();
+  field_.cell = cpu.cell();
+  for (int a = 0; a < 3; ++a) field_.dims[static_cast<std::size_t>(a)] = cpu.dims()[a];
+  targets_ = targets;
+  const int largest = std::max({field_.dims[0], field_.dims[1], field_.dims[2]});
+  int jump = 1;
+  while (jump * 2 < largest) jump *= 2;
+  for (; jump >= 1; jump /= 2) jumps_.push_back(jump);
+  jumps_.push_back(1);  // one more pass of 1 settles most of the cells the halving leaves a cell off
+  Context& c = fluid_->context();
+  const std::size_t cells = field_.cells() * targets_;
+  FF_TRY(seed_a_, DeviceBuffer::create(c, cells * 4));
+  FF_TRY(seed_b_, DeviceBuffer::create(c, cells * 4));
+  FF_TRY(s_field_, fluid_->sort_into_grid(s_pos_, m_, &field_));
+  FF_TRY(seed_init_k_, Kernel::create(c, "ctl_seed_init", shaders::ctl_seed_init(),
+                                      {&s_pos_, &s_target_, &s_fill_, &s_field_.start, &s_field_.items, &seed_a_}));
+  FF_TRY(flood_ab_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_a_, &seed_b_}));
+  FF_TRY(flood_ba_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_b_, &seed_a_}));
+  FF_TRY(gather_k_, Kernel::create(c, "ctl_gather", shaders::ctl_gather(),
+                                   {&fluid_->x_buffer(), &f_target_, &nearest_, &s_pos_, &seed_a_, &fluid_->velocity_buffer(),
+                                    &fluid_->acceleration_buffer()}));
+  return {};
 }
 
 Status AdaptiveDevice::set_fluid_targets(std::span<const std::uint8_t> target) {
@@ -133,6 +163,15 @@ Status AdaptiveDevice::get_bound(std::vector<Index>& bound) const {
   FF_CHECK(nearest_.download(near.data(), near.size() * 4));
   bound.resize(near.size());
   for (std::size_t j = 0; j < near.size(); ++j) bound[j] = near[j] == 0xFFFFFFFFu ? kInvalidIndex : original_[near[j]];
+  return {};
+}
+
+Status AdaptiveDevice::get_seeds(std::vector<Index>& seeds) const {
+  if (!params_.gather) return param_error("adaptive (GPU): no seed field without the gather steering");
+  std::vector<std::uint32_t> raw(field_.cells() * targets_);
+  FF_CHECK(seed_a_.download(raw.data(), raw.size() * 4));
+  seeds.resize(raw.size());
+  for (std::size_t k = 0; k < raw.size(); ++k) seeds[k] = raw[k] == 0xFFFFFFFFu ? kInvalidIndex : original_[raw[k]];
   return {};
 }
 
@@ -162,7 +201,41 @@ AdaptiveDevice::Constants AdaptiveDevice::constants(float dt) const {
   k.c3[1] = static_cast<std::int32_t>(std::ceil(hc_ / g.cell));
   k.c3[2] = !params_.bond_breaking ? 2 : params_.bond_radius == control::BondRadius::Paper ? 1 : 0;
   k.c3[3] = multi_ ? 1 : 0;
+  if (field_.cell > 0.0f) {
+    k.field_lo[0] = field_.lo.x(), k.field_lo[1] = field_.lo.y(), k.field_lo[2] = field_.lo.z(), k.field_lo[3] = 1.0f / field_.cell;
+    for (int a = 0; a < 3; ++a) k.field_dims[a] = field_.dims[static_cast<std::size_t>(a)];
+    k.field_dims[3] = static_cast<std::int32_t>(targets_);
+  }
   return k;
+}
+
+// The gather passes' own reading of c0, c1 and c3.y (shaders/control.glsl).
+AdaptiveDevice::Constants AdaptiveDevice::gather_constants(float dt, int jump) const {
+  Constants k = constants(dt);
+  for (int a = 0; a < 3; ++a) k.c0[a] = ctx_.gravity[a];
+  k.c0[3] = params_.gather_speed * ctx_.spacing();
+  k.c1[0] = 1.0f / params_.gather_time, k.c1[1] = params_.gather_fill;
+  k.c3[1] = jump;
+  return k;
+}
+
+void AdaptiveDevice::record_seed_field(VkCommandBuffer cb, float dt) const {
+  const std::size_t cells = field_.cells() * targets_;
+  const Constants init = gather_constants(dt, 0);
+  seed_init_k_.dispatch(cb, &init, groups(cells, 128));
+  compute_barrier(cb);
+  bool in_a = true;
+  for (const int jump : jumps_) {
+    const Constants k = gather_constants(dt, jump);
+    (in_a ? flood_ab_k_ : flood_ba_k_).dispatch(cb, &k, groups(cells, 128));
+    compute_barrier(cb);
+    in_a = !in_a;
+  }
+  if (!in_a) {  // the last pass wrote seed_b_: the gather reads seed_a_
+    const VkBufferCopy all{0, 0, cells * 4};
+    vkCmdCopyBuffer(cb, seed_b_.handle(), seed_a_.handle(), 1, &all);
+    compute_barrier(cb);
+  }
 }
 
 void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt) const {
@@ -171,12 +244,18 @@ void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt) const {
   compute_barrier(cb);
   bonds_k_.dispatch(cb, &k, groups(fluid_->size(), 128));
   compute_barrier(cb);
+  if (params_.gather) record_seed_field(cb, dt);
 }
 
 void AdaptiveDevice::record_accelerations(VkCommandBuffer cb, float dt) const {
   const Constants k = constants(dt);
   accel_k_.dispatch(cb, &k, groups(fluid_->size(), 256));
   compute_barrier(cb);
+  if (params_.gather) {
+    const Constants g = gather_constants(dt, 0);
+    gather_k_.dispatch(cb, &g, groups(fluid_->size(), 256));
+    compute_barrier(cb);
+  }
 }
 
 void AdaptiveDevice::record_correction(VkCommandBuffer cb, int iteration, float dt) const {

@@ -10,8 +10,12 @@
 // sub-step, and the passes that walk them find them again in the samples' grid (the same cells as the fluid's).
 // Every pass is a gather in a fixed order, so two runs give the same bits.
 //
-// So far (the rest is issue 45's): static targets that act from the start at full strength, without the gather
-// steering (AdaptiveParams::gather) and without kinematic corrections. create() says which of these a scene asks for.
+//   gather         (AdaptiveParams::gather) at the start, per target and cell of a coarse field, the nearest seed
+//                  (an under-filled sample) by jump flooding (ctl_seed_init, ctl_seed_flood); with the
+//                  accelerations, unbonded fluid is steered toward its cell's seed (ctl_gather)
+//
+// So far (the rest is issue 45's): static targets that act from the start at full strength, without kinematic
+// corrections. create() says which of these a scene asks for.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/control_samples.h"
@@ -42,6 +46,10 @@ class AdaptiveDevice final : public DeviceController {
   /// Per sample (in the targets' concatenated order), its fill ratio ρ_p/ρ_c at the start of the last sub-step.
   Status get_fill(std::vector<float>& fill) const;
   std::size_t samples() const { return m_; }
+  /// The gather steering's field of the last sub-step (with AdaptiveParams::gather): per target and cell of
+  /// `field()`, its seed as an index into the targets' concatenated sets, or kInvalidIndex.
+  Status get_seeds(std::vector<Index>& seeds) const;
+  const GridSpec& field() const { return field_; }
 
   void record_begin(VkCommandBuffer cb, float dt) const override;
   void record_accelerations(VkCommandBuffer cb, float dt) const override;
@@ -64,6 +72,16 @@ class AdaptiveDevice final : public DeviceController {
   PbfDevice::PointGrid s_grid_;  // the samples in the fluid grid's cells
   DeviceBuffer s_fill_, s_bond_r2_, s_coef_, f_target_, nearest_;
   Kernel fill_k_, bonds_k_, accel_k_, spring_k_, lambda_k_, correct_k_;
+  // The gather steering's seed field: the CPU field's cells (control/nearest_seed_field.h), one field per target.
+  GridSpec field_;
+  std::size_t targets_ = 1;
+  std::vector<int> jumps_;         // the flood passes
+  PbfDevice::PointGrid s_field_;   // the samples in the field's cells
+  DeviceBuffer seed_a_, seed_b_;   // targets × cells; the result ends in seed_a_
+  Kernel seed_init_k_, flood_ab_k_, flood_ba_k_, gather_k_;
+  Constants gather_constants(float dt, int jump) const;
+  Status make_seed_field(std::size_t targets);
+  void record_seed_field(VkCommandBuffer cb, float dt) const;
 };
 
 }  // namespace ff::gpu

@@ -306,19 +306,21 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   return timed ? read_times(iterations, true, *times) : Status{};
 }
 
-Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& points, std::size_t count) const {
+Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& points, std::size_t count,
+                                                      const GridSpec* other) const {
   if (count == 0) return param_error("GPU grid: no points");
+  const GridSpec& spec = other ? *other : grid_;
   Context& ctx = *ctx_;
   PointGrid g;
   FF_TRY(g.cell, DeviceBuffer::create(ctx, count * 4));
-  FF_TRY(g.count, DeviceBuffer::create(ctx, grid_.cells() * 4));
-  FF_TRY(g.start, DeviceBuffer::create(ctx, (grid_.cells() + 1) * 4));
+  FF_TRY(g.count, DeviceBuffer::create(ctx, spec.cells() * 4));
+  FF_TRY(g.start, DeviceBuffer::create(ctx, (spec.cells() + 1) * 4));
   FF_TRY(g.items, DeviceBuffer::create(ctx, count * 4));
   FF_TRY(Kernel count_k, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&points, &g.cell, &g.count}));
   FF_TRY(Kernel scan_k, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&g.count, &g.start}));
   FF_TRY(Kernel scatter_k, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(), {&g.cell, &g.start, &g.count, &g.items}));
   FF_TRY(Kernel order_k, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&g.start, &g.items}));
-  const Constants c = make_constants(grid_, count, nullptr, nullptr);
+  const Constants c = make_constants(spec, count, nullptr, nullptr);
   FF_CHECK(ctx.submit_and_wait([&](VkCommandBuffer cb) {
     vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
     compute_barrier(cb);
@@ -330,7 +332,7 @@ Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& point
     compute_barrier(cb);
     scatter_k.dispatch(cb, &c, groups(count, 256));
     compute_barrier(cb);
-    order_k.dispatch(cb, &c, groups(grid_.cells(), 256));
+    order_k.dispatch(cb, &c, groups(spec.cells(), 256));
   }));
   return g;
 }

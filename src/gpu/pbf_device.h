@@ -110,12 +110,12 @@ class PbfDevice {
   /// One λ pass at x* on the grid of the last solve (density and λ only, x* unchanged).
   Status lambda_only(const sim::PbfLambdaConsts& lk);
 
-  /// Points (vec4 each, `count` of them) sorted into this device's grid, as the fluid is: each point's cell, the
-  /// cells' runs (start: cells + 1) and the points by cell, then index. For samples that do not move.
+  /// Points (vec4 each, `count` of them) sorted into this device's grid as the fluid is (or into `other`): each
+  /// point's cell, the cells' runs (start: cells + 1) and the points by cell, then index. For samples that do not move.
   struct PointGrid {
     DeviceBuffer cell, count, start, items;
   };
-  Result<PointGrid> sort_into_grid(const DeviceBuffer& points, std::size_t count) const;
+  Result<PointGrid> sort_into_grid(const DeviceBuffer& points, std::size_t count, const GridSpec* other = nullptr) const;
   /// The controller whose passes every later sub-step records (null: none); it must outlive its use here.
   void set_controller(const DeviceController* controller) { controller_ = controller; }
   // What a DeviceController binds: the state, the accelerations, and the grid on x of the current sub-step.

@@ -101,5 +101,23 @@ std::span<const std::uint32_t> ctl_correct() {
   };
   return kWords;
 }
+std::span<const std::uint32_t> ctl_seed_init() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_seed_init.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_seed_flood() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_seed_flood.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> ctl_gather() {
+  static constexpr std::uint32_t kWords[] = {
+#include "ctl_gather.inc"
+  };
+  return kWords;
+}
 
 }  // namespace ff::gpu::shaders

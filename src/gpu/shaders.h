@@ -21,5 +21,8 @@ std::span<const std::uint32_t> ctl_accel();
 std::span<const std::uint32_t> ctl_spring();
 std::span<const std::uint32_t> ctl_lambda();
 std::span<const std::uint32_t> ctl_correct();
+std::span<const std::uint32_t> ctl_seed_init();
+std::span<const std::uint32_t> ctl_seed_flood();
+std::span<const std::uint32_t> ctl_gather();
 
 }  // namespace ff::gpu::shaders

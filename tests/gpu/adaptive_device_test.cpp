@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace ff::gpu {
@@ -113,6 +114,74 @@ TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
   for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
+// The gather steering from the start: the column above the sphere is steered into it. The seed field is the nearest
+// seed to each cell's centre up to a cell's size; the forming holds as much of the fluid as the CPU's after 40 frames.
+TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
+  Scene s;
+  s.params.gather = true;
+  sim::ParticleSet p;
+  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
+  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  const sim::ParticleSet start = p;
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  auto cpu_ctl = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+  ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
+  constexpr int kFrames = 40;
+  for (int f = 0; f < kFrames; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
+  std::size_t cpu_held = 0;
+  for (Index b : p.bound_control) cpu_held += b != kInvalidIndex;
+
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  auto dev = PbfDevice::create(**ctx, start.size(),
+                               GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
+  auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, s.params);
+  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+  (*dev)->set_controller(ctl->get());
+  // The field after the first frame, against the nearest seed by brute force.
+  ASSERT_TRUE((*dev)->advance(solver, 1.0 / 60.0).has_value());
+  std::vector<Index> seeds;
+  std::vector<float> fill;
+  ASSERT_TRUE((*ctl)->get_seeds(seeds).ok());
+  ASSERT_TRUE((*ctl)->get_fill(fill).ok());
+  const GridSpec& field = (*ctl)->field();
+  const float diag = field.cell * std::sqrt(3.0f);
+  std::size_t cells = 0, worse = 0, seeded = 0;
+  for (int z = 0; z < field.dims[2]; ++z)
+    for (int y = 0; y < field.dims[1]; ++y)
+      for (int x = 0; x < field.dims[0]; ++x, ++cells) {
+        const Vec3f centre = field.lo + field.cell * Vec3f(float(x) + 0.5f, float(y) + 0.5f, float(z) + 0.5f);
+        float best = INFINITY;
+        for (std::size_t i = 0; i < fill.size(); ++i)
+          if (fill[i] < s.params.gather_fill) best = std::min(best, (s.c.set.position[i] - centre).norm());
+        const Index got = seeds[cells];
+        ASSERT_EQ(got == kInvalidIndex, !std::isfinite(best)) << "cell " << cells;
+        if (got == kInvalidIndex) continue;
+        ++seeded;
+        ASSERT_LT(fill[got], s.params.gather_fill);
+        const float d = (s.c.set.position[got] - centre).norm();
+        worse += d > best + 1e-6f;
+        EXPECT_LE(d, best + diag) << "cell " << cells;
+      }
+  std::printf("seed field: %zu cells, %zu with a seed, %zu not the nearest (all within a cell's diagonal)\n", cells,
+              seeded, worse);
+  EXPECT_GT(seeded, 0u);
+  for (int f = 1; f < kFrames; ++f) ASSERT_TRUE((*dev)->advance(solver, 1.0 / 60.0).has_value());
+  std::vector<Index> bound;
+  ASSERT_TRUE((*ctl)->get_bound(bound).ok());
+  std::size_t gpu_held = 0;
+  for (Index b : bound) gpu_held += b != kInvalidIndex;
+  std::printf("after %d frames with the gather steering: CPU holds %zu of %zu particles, GPU %zu\n", kFrames, cpu_held,
+              p.size(), gpu_held);
+  EXPECT_GT(cpu_held, p.size() / 2);
+  EXPECT_LE(std::abs(double(gpu_held) - double(cpu_held)), 0.05 * double(p.size()));
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
 TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   Scene s;
   auto ctx = Context::create({.device = -1, .validation = false});
@@ -121,11 +190,11 @@ TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
   auto dev = PbfDevice::create(**ctx, 100, GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
   ASSERT_TRUE(dev.has_value());
-  control::AdaptiveParams gather = s.params;
-  gather.gather = true;
-  auto a = AdaptiveDevice::create(**dev, s.targets(), s.ctx, gather);
+  control::AdaptiveParams kinematic = s.params;
+  kinematic.kinematic = true;
+  auto a = AdaptiveDevice::create(**dev, s.targets(), s.ctx, kinematic);
   ASSERT_FALSE(a.has_value());
-  EXPECT_NE(a.error().message.find("gather"), std::string::npos) << a.error().message;
+  EXPECT_NE(a.error().message.find("kinematic"), std::string::npos) << a.error().message;
   auto moving = s.targets();
   moving[0].motion.keys.resize(2);
   moving[0].motion.keys[1].time = 1.0;

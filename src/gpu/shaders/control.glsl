@@ -10,7 +10,12 @@ layout(push_constant) uniform ControlConstants {
   vec4 c2;          // γ of the spring (scaled to Δt), |n| threshold of the boundary correction, speed limit, Δt
   ivec4 c3;         // samples m, reach in cells (⌈H_c / cell⌉), bond radius rule (0 over-full, 1 paper, 2 none),
                     // 1 when there are several targets
+  vec4 field_lo;    // the seed field's grid (the gather steering): xyz its corner, w 1 / its cell edge
+  ivec4 field_dims; // xyz its cells per axis, w the number of targets
 } C;
+// The gather passes (ctl_seed_*.comp, ctl_gather.comp) read c0 and c1 as their own: c0 = gravity xyz and the steering
+// speed (m/s), c1 = x: 1 / the steering time constant, y: the fill below which a sample is a seed; c3.y = the jump of
+// a flood pass.
 #include "common.glsl"
 
 // Every cell within `reach` cells of c on each axis, clamped to the grid: a box of cells covering the ball of H_c.
@@ -20,3 +25,15 @@ layout(push_constant) uniform ControlConstants {
       for (int dx = max(c.x - reach, 0); dx <= min(c.x + reach, C.grid_dims.x - 1); ++dx) {            \
         const uint CELL = cell_index(ivec3(dx, dy, dz));
 #define END_FOR_CELLS }
+
+// The seed field: cell of a position (clamped) and the centre of a cell.
+ivec3 field_coord(vec3 p) {
+  return clamp(ivec3(floor((p - C.field_lo.xyz) * C.field_lo.w)), ivec3(0), C.field_dims.xyz - 1);
+}
+uint field_cells() { return uint(C.field_dims.x) * uint(C.field_dims.y) * uint(C.field_dims.z); }
+uint field_index(ivec3 c) { return uint(c.x + C.field_dims.x * (c.y + C.field_dims.y * c.z)); }
+ivec3 field_cell(uint c) {
+  const uint nx = uint(C.field_dims.x), ny = uint(C.field_dims.y);
+  return ivec3(int(c % nx), int((c / nx) % ny), int(c / (nx * ny)));
+}
+vec3 field_centre(ivec3 c) { return C.field_lo.xyz + (vec3(c) + 0.5) / C.field_lo.w; }

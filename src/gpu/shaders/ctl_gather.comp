@@ -1,0 +1,29 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// The gather steering (ours, METHOD §a.10; control/adaptive.cpp, gather; static targets): an unbonded particle whose
+// target has under-filled samples is steered toward the nearest of them (the seed field at its cell) at a limited
+// speed, with gravity cancelled: a += −g + (v_des − v)/τ, v_des = speed · (x_s − x)/|x_s − x|.
+layout(local_size_x = 256) in;
+#include "control.glsl"
+layout(std430, binding = 0) readonly buffer FX { vec4 f_x[]; };
+layout(std430, binding = 1) readonly buffer FTarget { uint f_target[]; };
+layout(std430, binding = 2) readonly buffer Nearest { uint nearest[]; };
+layout(std430, binding = 3) readonly buffer SPos { vec4 s_pos[]; };
+layout(std430, binding = 4) readonly buffer Seed { uint seed[]; };
+layout(std430, binding = 5) readonly buffer Vel { vec4 vel[]; };
+layout(std430, binding = 6) buffer Accel { vec4 accel[]; };
+
+void main() {
+  const uint j = gl_GlobalInvocationID.x;
+  if (j >= uint(C.grid_dims.w) || nearest[j] != 0xFFFFFFFFu) return;
+  const uint t = f_target[j];
+  if (t >= uint(C.field_dims.w)) return;
+  const vec3 xj = f_x[j].xyz;
+  const uint s = seed[t * field_cells() + field_index(field_coord(xj))];
+  if (s == 0xFFFFFFFFu) return;
+  const vec3 to = s_pos[s].xyz - xj;
+  const float len = length(to);
+  if (len <= 0.0) return;
+  const vec3 v_des = (C.c0.w / len) * to;
+  accel[j] += vec4(-C.c0.xyz + C.c1.x * (v_des - vel[j].xyz), 0.0);
+}
