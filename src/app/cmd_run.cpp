@@ -104,6 +104,11 @@ Command add_run(CLI::App& app) {
   run->add_option("--max-memory", o->max_memory, "MiB the run may need, estimated before it starts (overrides limits.max_memory_mb)")
       ->check(CLI::Range(1.0, 1e9));
   add_controller_option(run, o->controller, " (overrides the scene's controller.name)");
+  run->add_option("--device", o->run.device,
+                  "cpu, gpu (Vulkan; lavapipe where there is no GPU) or auto (a GPU when there is one and the scene is one "
+                  "the GPU path does, else the CPU); docs/gpu.md")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
+      ->capture_default_str();
   return {run, [o] {
             o->run.mesh = !o->no_mesh;
             o->run.animation = !o->no_animation;

@@ -1,4 +1,6 @@
 #include "pipeline/run.h"
+
+#include "pipeline/stepper.h"
 #include "pose/skin_eval.h"
 
 #include "io/write_vdb.h"
@@ -136,6 +138,7 @@ struct RunFacts {
   const std::vector<TargetShapes>& shapes;   // empty: no targets, no shape metrics
   std::size_t control_count = 0;
   std::string controller;
+  std::string device;                        // report.json "device": "cpu", or the GPU's name and driver
   double rest_density = 0, particle_mass = 0;
   RunEstimate estimate;                      // report.json "estimate"
 };
@@ -284,6 +287,7 @@ Status write_report(const fs::path& out, const RunFacts& facts, const RunState& 
   rep["status"] = status;
   if (!error.empty()) rep["error"] = error;
   rep["scene_file"] = facts.scene.file.string();
+  rep["device"] = facts.device;
   rep["scene"] = scene::scene_to_json(facts.scene);  // every key the run used: run it again to reproduce the run
   rep["targets"] = facts.targets;
   rep["totals"] = run_totals(facts, st);
@@ -314,8 +318,7 @@ struct FrameLoop {
 
 /// Simulates frames st.next_frame … loop.frames (or until the shape has formed and held), writing each particle
 /// frame, its metrics row and the checkpoints; returns the last frame simulated.
-Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver& solver, sim::Controller& controller,
-                            core::Progress& progress) {
+Result<int> simulate_frames(const FrameLoop& loop, RunState& st, FrameStepper& stepper, core::Progress& progress) {
   const scene::Scene& scene = loop.facts.scene;
   const double frame_dt = 1.0 / scene.output.fps;
   std::vector<Vec3f> xs, vs;
@@ -325,7 +328,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, sim::PbfSolver&
   const int window = static_cast<int>(std::lround(scene.output.fps));  // 1 s of frames
   for (int f = st.next_frame; f <= loop.frames; ++f) {
     core::Stopwatch watch;
-    auto stats = solver.advance(st.particles, st.time, frame_dt, controller);
+    auto stats = stepper.advance(st.particles, st.time, frame_dt);
     const double seconds = watch.seconds();
     if (!stats) {
       progress.end();
@@ -383,6 +386,7 @@ RunSummary run_summary(const RunFacts& facts, const RunState& st, int last_frame
   sum.mean_frame_seconds = mean_step_seconds(st.rows);
   sum.peak_memory_mib = core::peak_rss_mib();
   sum.controller = facts.controller;
+  sum.device = facts.device;
   if (!facts.shapes.empty()) {
     const json t = run_totals(facts, st);
     sum.has_targets = true;
@@ -513,6 +517,13 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   // targets is completed from them (spacing, fluid, domain).
   FF_TRY(auto geometry, load_target_meshes(scene));
   FF_CHECK(complete_scene(scene, geometry));
+  // The device is checked before anything is sampled or written: --device gpu on a scene it does not do yet stops here.
+  FF_TRY(const Device device, parse_device(opt.device));
+  {
+    control::ControllerSpec spec = scene.controller;
+    if (geometry.empty()) spec.name = "none";
+    FF_CHECK(check_device(device, scene.solver, spec));
+  }
   const bool run_until_formed = !opt.frames && scene.auto_frames && !geometry.empty();
   const int frames = opt.frames.value_or(run_until_formed ? opt.max_auto_frames : scene.output.frames);
   if (!(frames >= 1 && frames <= 10'000'000))
@@ -552,23 +563,25 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   // A scene without targets has nothing to control: plain PBF whatever the controller setting.
   control::ControllerSpec spec = scene.controller;
   if (prepared.controls.empty()) spec.name = "none";
-  FF_TRY(auto controller, control::make_controller(spec, std::move(prepared.controls), ctx));
-  spdlog::info("{} particles, d = {} m, H_p = {} m, rho0 = {:.1f} kg/m^3 (lattice-calibrated), controller {}, {} threads",
+  FF_TRY(auto stepper, make_stepper(device, scene.solver, scene.domain, spec, std::move(prepared.controls), ctx, st.particles));
+  spdlog::info("{} particles, d = {} m, H_p = {} m, rho0 = {:.1f} kg/m^3 (lattice-calibrated), controller {}, {}",
                st.particles.size(), scene.solver.spacing(), scene.solver.support(), solver.rest_density(),
-               controller->name(), core::thread_count());
+               stepper->controller(), stepper->device() == "cpu" ? fmt::format("{} threads", core::thread_count())
+                                                                 : "on " + stepper->device());
 
   const RunFacts facts{scene,
                        std::move(prepared.info),
                        prepared.shapes,
                        prepared.control_count,
-                       std::string(controller->name()),
+                       std::string(stepper->controller()),
+                       stepper->device(),
                        solver.rest_density(),
                        solver.particle_mass(),
                        estimate};
   progress.begin(run_until_formed ? "forming" : "simulating", static_cast<std::size_t>(frames));
   progress.tick(static_cast<std::size_t>(st.next_frame - 1));
   const FrameLoop loop{out, facts, prepared.motions, frames, run_until_formed};
-  FF_TRY(const int last_frame, simulate_frames(loop, st, solver, *controller, progress));
+  FF_TRY(const int last_frame, simulate_frames(loop, st, *stepper, progress));
   FF_CHECK(write_report(out, facts, st, "ok", ""));
 
   RunSummary sum = run_summary(facts, st, last_frame);

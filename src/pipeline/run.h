@@ -23,6 +23,7 @@ struct RunOptions {
   bool animation = true;      ///< with `mesh` and no mesh_every: OUT/animation.glb of every animation_every()-th
                               ///< frame and the point cache OUT/particles.pc2 (no per-frame OBJs)
   bool vdb = false;           ///< with `mesh`: each meshed frame's level set as OUT/vdb/frame_NNNNN.vdb (OpenVDB)
+  std::string device = "cpu"; ///< --device cpu|gpu|auto (pipeline/stepper.h): where the frames are simulated
 };
 
 /// The frame step of the default animation of a run of `frames` frames: every kAnimationEvery-th frame, coarser
@@ -37,6 +38,7 @@ struct RunSummary {
   double mean_frame_seconds = 0.0;
   double peak_memory_mib = 0.0;
   std::string controller;
+  std::string device = "cpu";  ///< what simulated: "cpu", or the GPU's name and driver
   // Shape metrics (METHOD §d), when the scene has targets.
   bool has_targets = false;
   std::size_t control_particles = 0, controlled = 0;
