@@ -44,12 +44,20 @@ Constants make_constants(const GridSpec& g, std::size_t n, const sim::PbfLambdaC
   return c;
 }
 
-// The force and update passes read gravity and Δt where the Δx pass reads its constants: their own block.
-Constants force_constants(Constants c, const sim::PbfForceConsts& fk) {
+// The prediction and update passes read gravity and Δt where the Δx pass reads its constants: their own block.
+Constants step_constants(Constants c, const sim::PbfForceConsts& fk) {
   for (int a = 0; a < 3; ++a) c.k2[a] = fk.gravity[a];
   c.k2[3] = fk.dt;
   c.k3[0] = fk.xsph, c.k3[1] = fk.mass_poly6_k;
   return c;
+}
+
+// The force pass also reads the drag's coefficients, in the walls' slots (it does not clamp to the walls).
+Constants force_constants(const Constants& c, const sim::PbfForceConsts& fk) {
+  Constants f = step_constants(c, fk);
+  f.wall_lo[0] = fk.drag_L, f.wall_lo[1] = fk.drag_y, f.wall_lo[2] = fk.drag_re, f.wall_lo[3] = fk.drag_d2;
+  f.wall_hi[0] = fk.drag_acc, f.wall_hi[1] = f.wall_hi[2] = f.wall_hi[3] = 0.0f;
+  return f;
 }
 
 std::uint32_t groups(std::size_t items, std::uint32_t size) { return static_cast<std::uint32_t>((items + size - 1) / size); }
@@ -262,8 +270,8 @@ Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const 
 }
 
 template <class Stamp>
-void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, int iterations,
-                               Stamp&& stamp) const {
+void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
+                               int iterations, Stamp&& stamp) const {
   stamp(cb);
   // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
   const VkBufferCopy all{0, 0, n_ * 16};
@@ -271,18 +279,18 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   compute_barrier(cb);
   record_grid(cb, &c);
   stamp(cb);
-  const float dt = cf.k2[3];
+  const float dt = cs.k2[3];
   if (controller_) controller_->record_begin(cb, dt);
   lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
   compute_barrier(cb);
   force_k_.dispatch(cb, &cf, groups(n_, 128));
   compute_barrier(cb);
   if (controller_) controller_->record_accelerations(cb, dt);
-  predict_k_.dispatch(cb, &cf, groups(n_, 256));  // x* (the x buffer was copied into it for the grid)
+  predict_k_.dispatch(cb, &cs, groups(n_, 256));  // x* (the x buffer was copied into it for the grid)
   compute_barrier(cb);
   stamp(cb);
   record_sweeps(cb, &c, iterations, stamp, dt);
-  update_k_.dispatch(cb, &cf, groups(n_, 256));
+  update_k_.dispatch(cb, &cs, groups(n_, 256));
   compute_barrier(cb);
   stamp(cb);
 }
@@ -292,7 +300,7 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
   const Constants c = make_constants(grid_, n_, &lk, &dk);
-  const Constants cf = force_constants(c, fk);
+  const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
   std::uint32_t q = 0;
@@ -301,7 +309,7 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   };
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
-    record_substep(cb, c, cf, iterations, stamp);
+    record_substep(cb, c, cf, cs, iterations, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
 }
@@ -364,10 +372,10 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double fram
   const sim::PbfDeltaConsts dk = solver.delta_consts();
   const sim::PbfForceConsts fk = solver.force_consts(plan.dt);
   const Constants c = make_constants(grid_, n_, &lk, &dk);
-  const Constants cf = force_constants(c, fk);
+  const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
   // Every sub-step in one submission: the device runs the frame without waiting for the host.
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, solver.params().iterations, [](VkCommandBuffer) {});
+    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, cs, solver.params().iterations, [](VkCommandBuffer) {});
   }));
   FF_TRY(const Check after, check());
   if (after.first_bad < n_) return blown(after.first_bad, plan.steps);

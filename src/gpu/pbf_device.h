@@ -141,7 +141,8 @@ class PbfDevice {
   // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed). With dt > 0
   // the controller's correction comes before each sweep.
   template <class Stamp>
-  void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, int iterations, Stamp&& stamp) const;
+  void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs, int iterations,
+                      Stamp&& stamp) const;
   template <class Stamp>
   void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp, float dt) const;
   Status read_times(int iterations, bool with_force, PassTimes& times) const;

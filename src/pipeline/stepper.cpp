@@ -92,7 +92,6 @@ class GpuStepper final : public FrameStepper {
 std::string gpu_gap(const sim::SolverParams& sp, const control::ControllerSpec& spec) {
   if (spec.name != "adaptive" && spec.name != "none") return fmt::format("the controller '{}'", spec.name);
   if (sp.surface_tension > 0.0f) return "surface tension (solver.surface_tension > 0)";
-  if (sp.drag > 0.0f) return "air drag (solver.drag > 0)";
   if (sp.vorticity > 0.0f) return "vorticity confinement (solver.vorticity > 0)";
   return {};
 }

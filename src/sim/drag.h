@@ -52,6 +52,12 @@ class DragModel {
   /// a_drag of a particle with velocity v, `count` neighbours and occlusion lanes `best` (see occlusion()), m/s².
   Vec3f acceleration(const Vec3f& v, std::size_t count, __m128 best) const;
 
+  /// The per-run coefficients of acceleration(), for the GPU's force pass (gpu/shaders/pbf_force.comp).
+  struct Coefficients {
+    float L = 0, y_coeff = 0, re_coeff = 0, d2 = 0, acc = 0;
+  };
+  Coefficients coefficients() const { return {L_, y_coeff_, re_coeff_, d2_, acc_}; }
+
  private:
   float L_ = 0, y_coeff_ = 0, re_coeff_ = 0, d2_ = 0, acc_ = 0;
 };

@@ -31,6 +31,8 @@ struct PbfForceConsts {
   float dt = 0;                   // s, the sub-step
   float xsph = 0;                 // XSPH viscosity η / Δt (0: none)
   float mass_poly6_k = 0;         // m · Poly6 k: (m/ρ_j) W_ij = mass_poly6_k (h² − r²)³ / ρ_j
+  // Air drag (sim/drag.h, DragModel's coefficients); drag_acc = 0: none.
+  float drag_L = 0, drag_y = 0, drag_re = 0, drag_d2 = 0, drag_acc = 0;
 };
 
 /// λ at x* (s.x/y/z): density[point] per particle, lambda in s's padded layout (0 at padding).

@@ -328,10 +328,17 @@ PbfDeltaConsts PbfSolver::delta_consts() const {
   return dk;
 }
 
-// g + XSPH as xsph_accelerations() applies them (without drag and surface tension).
+// g + XSPH and air drag as external_accelerations() applies them (not surface tension).
 PbfForceConsts PbfSolver::force_consts(float dt) const {
   PbfForceConsts fk;
   fk.gravity = params_.gravity, fk.dt = dt, fk.xsph = params_.viscosity / dt, fk.mass_poly6_k = mass_ * poly6_.k;
+  if (params_.drag > 0.0f) {  // as external_accelerations() builds its DragModel
+    DragParams dp;
+    dp.scale = params_.drag, dp.air_density = params_.air_density, dp.liquid_density = params_.rest_density;
+    dp.spacing = params_.spacing(), dp.mass = mass_;
+    const DragModel::Coefficients c = DragModel(dp).coefficients();
+    fk.drag_L = c.L, fk.drag_y = c.y_coeff, fk.drag_re = c.re_coeff, fk.drag_d2 = c.d2, fk.drag_acc = c.acc;
+  }
   return fk;
 }
 

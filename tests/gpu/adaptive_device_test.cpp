@@ -23,7 +23,7 @@ struct Scene {
   control::AdaptiveParams params;
   control::ControlContext ctx;
   Scene() {
-    c.sp.surface_tension = 0.0f, c.sp.drag = 0.0f, c.sp.vorticity = 0.0f;  // not on the device yet
+    c.sp.surface_tension = 0.0f, c.sp.vorticity = 0.0f;  // not on the device yet
     c.sp.max_iterations = c.sp.iterations;                                    // a fixed sweep count on both
     params.gather = false;                                                    // not on the device yet
   }
