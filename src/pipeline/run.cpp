@@ -495,6 +495,15 @@ Status start_fresh(const fs::path& out, const scene::Scene& scene, const TargetS
   return {};
 }
 
+/// --device, checked against the scene (a scene without targets runs no controller).
+Result<Device> run_device(const scene::Scene& scene, bool has_targets, const std::string& name) {
+  FF_TRY(const Device device, parse_device(name));
+  control::ControllerSpec spec = scene.controller;
+  if (!has_targets) spec.name = "none";
+  FF_CHECK(check_device(device, scene.solver, spec));
+  return device;
+}
+
 }  // namespace
 
 // Both bounds of the default animation, measured on the default scene (200 frames, 10k particles; bench/RESULTS.md,
@@ -518,12 +527,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   FF_TRY(auto geometry, load_target_meshes(scene));
   FF_CHECK(complete_scene(scene, geometry));
   // The device is checked before anything is sampled or written: --device gpu on a scene it does not do yet stops here.
-  FF_TRY(const Device device, parse_device(opt.device));
-  {
-    control::ControllerSpec spec = scene.controller;
-    if (geometry.empty()) spec.name = "none";
-    FF_CHECK(check_device(device, scene.solver, spec));
-  }
+  FF_TRY(const Device device, run_device(scene, !geometry.empty(), opt.device));
   const bool run_until_formed = !opt.frames && scene.auto_frames && !geometry.empty();
   const int frames = opt.frames.value_or(run_until_formed ? opt.max_auto_frames : scene.output.frames);
   if (!(frames >= 1 && frames <= 10'000'000))
