@@ -103,15 +103,20 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->vel_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->check_, DeviceBuffer::create(ctx, 8));
   FF_TRY(d->accel_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->partial_, DeviceBuffer::create(ctx, groups(n, 256) * 4));
+  FF_TRY(d->state_, DeviceBuffer::create(ctx, kStateBytes));
   FF_TRY(d->count_k_, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&d->pos_, &d->cell_, &d->count_}));
   FF_TRY(d->scan_k_, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&d->count_, &d->start_}));
   FF_TRY(d->scatter_k_, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(),
                                        {&d->cell_, &d->start_, &d->count_, &d->items_}));
   FF_TRY(d->order_k_, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&d->start_, &d->items_}));
   FF_TRY(d->lambda_k_, Kernel::create(ctx, "pbf_lambda", shaders::pbf_lambda(),
-                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->density_, &d->lambda_}));
+                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->density_, &d->lambda_, &d->state_}));
   FF_TRY(d->delta_k_, Kernel::create(ctx, "pbf_delta", shaders::pbf_delta(),
-                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->lambda_, &d->next_}));
+                                     {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->lambda_, &d->next_, &d->state_}));
+  FF_TRY(d->copy_k_, Kernel::create(ctx, "pbf_copy", shaders::pbf_copy(), {&d->next_, &d->pos_, &d->state_}));
+  FF_TRY(d->error_k_, Kernel::create(ctx, "density_error", shaders::density_error(), {&d->density_, &d->partial_, &d->state_}));
+  FF_TRY(d->decide_k_, Kernel::create(ctx, "density_decide", shaders::density_decide(), {&d->partial_, &d->state_}));
   FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->accel_}));
   FF_TRY(d->predict_k_, Kernel::create(ctx, "pbf_predict", shaders::pbf_predict(), {&d->x_, &d->vel_, &d->accel_, &d->pos_}));
@@ -184,20 +189,32 @@ void PbfDevice::record_grid(VkCommandBuffer cb, const void* constants) const {
 }
 
 template <class Stamp>
-void PbfDevice::record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp, float dt) const {
-  const VkBufferCopy all{0, 0, n_ * 16};
-  for (int it = 0; it < iterations; ++it) {
-    if (controller_ && dt > 0.0f) controller_->record_correction(cb, it, dt);
+void PbfDevice::record_sweeps(VkCommandBuffer cb, const void* constants, const Sweeps& sweeps, Stamp&& stamp,
+                              float dt) const {
+  // The passes of a sweep past the first `iterations` return at once when the sweeps are done (a flag on the device:
+  // the host never waits in a sub-step).
+  for (int it = 0; it < std::max(sweeps.max_iterations, sweeps.iterations); ++it) {
+    if (controller_ && dt > 0.0f && it < sweeps.iterations) controller_->record_correction(cb, it, dt);
     lambda_k_.dispatch(cb, constants, groups(n_, 128));
     compute_barrier(cb);
     stamp(cb);
     delta_k_.dispatch(cb, constants, groups(n_, 128));
     compute_barrier(cb);
     stamp(cb);
-    vkCmdCopyBuffer(cb, next_.handle(), pos_.handle(), 1, &all);  // Jacobi: x* ← next
+    copy_k_.dispatch(cb, constants, groups(n_, 256));  // Jacobi: x* ← next
+    error_k_.dispatch(cb, constants, groups(n_, 256));  // reads the λ pass's densities, not x*
+    compute_barrier(cb);
+    decide_k_.dispatch(cb, constants, 1);
     compute_barrier(cb);
     stamp(cb);
   }
+}
+
+void PbfDevice::reset_sweeps(VkCommandBuffer cb, bool frame) const {
+  // done, sweeps, mean, max bits = 0 each sub-step; the frame's total too at its start.
+  vkCmdFillBuffer(cb, state_.handle(), 0, 16, 0);
+  if (frame) vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
+  compute_barrier(cb);
 }
 
 // Timestamps of a timed submission: [0] start, [1] after the grid, then (substep only) [2] after the force pass and
@@ -228,7 +245,8 @@ Status PbfDevice::read_times(int iterations, bool with_force, PassTimes& times) 
 
 Status PbfDevice::solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, int iterations, PassTimes* times) {
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
-  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  Constants c = make_constants(grid_, n_, &lk, &dk);
+  c.k3[2] = static_cast<float>(iterations), c.k3[3] = -1.0f;  // exactly `iterations` sweeps
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
   std::uint32_t q = 0;
@@ -238,10 +256,11 @@ Status PbfDevice::solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConst
   };
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
+    reset_sweeps(cb, true);
     stamp(cb);
     record_grid(cb, &c);
     stamp(cb);
-    record_sweeps(cb, &c, iterations, stamp, 0.0f);  // a bare solve: no controller
+    record_sweeps(cb, &c, Sweeps{iterations, iterations, -1.0f}, stamp, 0.0f);  // a bare solve: no controller
   }));
   return timed ? read_times(iterations, false, *times) : Status{};
 }
@@ -271,7 +290,8 @@ Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const 
 
 template <class Stamp>
 void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
-                               int iterations, Stamp&& stamp) const {
+                               const Sweeps& sweeps, Stamp&& stamp) const {
+  reset_sweeps(cb, false);
   stamp(cb);
   // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
   const VkBufferCopy all{0, 0, n_ * 16};
@@ -289,17 +309,19 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   predict_k_.dispatch(cb, &cs, groups(n_, 256));  // x* (the x buffer was copied into it for the grid)
   compute_barrier(cb);
   stamp(cb);
-  record_sweeps(cb, &c, iterations, stamp, dt);
+  record_sweeps(cb, &c, sweeps, stamp, dt);
   update_k_.dispatch(cb, &cs, groups(n_, 256));
   compute_barrier(cb);
   stamp(cb);
 }
 
 Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
-                          int iterations, PassTimes* times) {
+                          const Sweeps& sweeps, PassTimes* times) {
+  const int iterations = std::max(sweeps.iterations, sweeps.max_iterations);
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
-  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  Constants c = make_constants(grid_, n_, &lk, &dk);
+  c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
   const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
@@ -309,7 +331,8 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   };
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
-    record_substep(cb, c, cf, cs, iterations, stamp);
+    vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
+    record_substep(cb, c, cf, cs, sweeps, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
 }
@@ -371,15 +394,29 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double fram
   const sim::PbfLambdaConsts lk = solver.lambda_consts();
   const sim::PbfDeltaConsts dk = solver.delta_consts();
   const sim::PbfForceConsts fk = solver.force_consts(plan.dt);
-  const Constants c = make_constants(grid_, n_, &lk, &dk);
+  const sim::SolverParams& sp = solver.params();
+  const Sweeps sweeps{sp.iterations, sp.max_iterations, sp.max_density_error};
+  Constants c = make_constants(grid_, n_, &lk, &dk);
+  c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
   const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
   // Every sub-step in one submission: the device runs the frame without waiting for the host.
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, cs, solver.params().iterations, [](VkCommandBuffer) {});
+    vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
+    compute_barrier(cb);
+    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, cs, sweeps, [](VkCommandBuffer) {});
   }));
   FF_TRY(const Check after, check());
   if (after.first_bad < n_) return blown(after.first_bad, plan.steps);
-  return DeviceFrame{plan.steps, plan.dt, plan.capped, before.max_speed};
+  struct {
+    std::uint32_t done, sweeps;
+    float mean;
+    std::uint32_t max_bits, total;
+    float last_max;
+  } state;
+  static_assert(sizeof state == kStateBytes);
+  FF_CHECK(state_.download(&state, sizeof state));
+  return DeviceFrame{plan.steps, plan.dt, plan.capped, before.max_speed, static_cast<long>(state.total), state.mean,
+                     state.last_max};
 }
 
 Status PbfDevice::lambda_only(const sim::PbfLambdaConsts& lk) {

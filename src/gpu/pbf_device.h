@@ -53,6 +53,8 @@ struct DeviceFrame {
   float dt = 0;
   bool capped = false;     ///< CFL wanted more than max_substeps
   double max_speed = 0;    ///< m/s at the start of the frame, from which the sub-steps were planned
+  long sweeps = 0;         ///< density-constraint sweeps run over the frame's sub-steps
+  double density_error_mean = 0, density_error_max = 0;  ///< of the last sweep: mean and largest max(ρ/ρ0 − 1, 0)
 };
 
 /// A shape controller's passes on the device, recorded into a sub-step at the solver's hook points (sim/controller.h).
@@ -83,11 +85,17 @@ class PbfDevice {
   /// The particles' state between sub-steps: positions x and velocities v (n each).
   Status set_state(std::span<const Vec3f> x, std::span<const Vec3f> v);
   Status get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const;
+  /// The sweeps of a sub-step: at least `iterations`, then more while the mean compression is above `target`, up
+  /// to `max_iterations` (sim::PbfSolver::substep's rule); the controller corrects in the first `iterations` only.
+  struct Sweeps {
+    int iterations = 4, max_iterations = 4;
+    float target = 0.0f;
+  };
   /// One sub-step of the state (sim::PbfSolver::substep with the controller of set_controller(), without surface
-  /// tension, drag or vorticity, and with a fixed sweep count): the grid on x, ρ(x), the forces and x*, `iterations` sweeps, v = (x* − x)/Δt and
-  /// x = x*. One submission; waits for it.
+  /// tension or vorticity): the grid on x, ρ(x), the forces and x*, the sweeps, v = (x* − x)/Δt and x = x*. One
+  /// submission; waits for it.
   Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
-                 int iterations, PassTimes* times = nullptr);
+                 const Sweeps& sweeps, PassTimes* times = nullptr);
   /// One output frame of `frame_dt` seconds in equal sub-steps planned as the CPU plans them (sim::plan_substeps on
   /// the largest speed, reduced on the device), each a substep() with `solver`'s constants and a fixed
   /// params().iterations sweeps. A non-finite position or velocity, before or after the frame, is an Error naming
@@ -138,22 +146,27 @@ class PbfDevice {
  private:
   PbfDevice() = default;
   void record_grid(VkCommandBuffer cb, const void* constants) const;
-  // The sweeps of a solve, each followed by x* ← next; `stamp` after each pass (timestamps when timed). With dt > 0
-  // the controller's correction comes before each sweep.
+  // One sub-step: c the sweeps' constants, cf the force pass's, cs the prediction's and update's.
   template <class Stamp>
-  void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs, int iterations,
-                      Stamp&& stamp) const;
+  void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
+                      const Sweeps& sweeps, Stamp&& stamp) const;
+  // The sweeps of a sub-step, each followed by x* ← next and the density error; `stamp` after each pass (timestamps
+  // when timed). With dt > 0 the controller's correction comes before each of the first sweeps.iterations.
   template <class Stamp>
-  void record_sweeps(VkCommandBuffer cb, const void* constants, int iterations, Stamp&& stamp, float dt) const;
+  void record_sweeps(VkCommandBuffer cb, const void* constants, const Sweeps& sweeps, Stamp&& stamp, float dt) const;
   Status read_times(int iterations, bool with_force, PassTimes& times) const;
+  void reset_sweeps(VkCommandBuffer cb, bool frame) const;
 
   Context* ctx_ = nullptr;
   std::size_t n_ = 0;
   GridSpec grid_;
   DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_, accel_;
+  DeviceBuffer partial_, state_;  // the density error's per-workgroup sums; the sweeps' state (density_decide.comp)
   Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, predict_k_, update_k_, check_k_;
+  Kernel copy_k_, error_k_, decide_k_;
   const DeviceController* controller_ = nullptr;
   VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 4 + 3·kMaxTimedIterations queries
+  static constexpr VkDeviceSize kStateBytes = 24;  // done, sweeps, mean, max bits, total, last max
   static constexpr int kMaxTimedIterations = 64;
 };
 

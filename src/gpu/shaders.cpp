@@ -119,5 +119,23 @@ std::span<const std::uint32_t> ctl_gather() {
   };
   return kWords;
 }
+std::span<const std::uint32_t> pbf_copy() {
+  static constexpr std::uint32_t kWords[] = {
+#include "pbf_copy.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> density_error() {
+  static constexpr std::uint32_t kWords[] = {
+#include "density_error.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> density_decide() {
+  static constexpr std::uint32_t kWords[] = {
+#include "density_decide.inc"
+  };
+  return kWords;
+}
 
 }  // namespace ff::gpu::shaders

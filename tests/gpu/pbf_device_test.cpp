@@ -258,7 +258,8 @@ SubstepRun run_substeps(const sim::SolverParams& sp, const sim::Domain& dom, con
   if (!dev) return r;
   EXPECT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
   for (int s = 0; s < steps; ++s)
-    EXPECT_TRUE((*dev)->substep(solver.lambda_consts(), solver.delta_consts(), solver.force_consts(dt), sp.iterations).ok());
+    EXPECT_TRUE((*dev)->substep(solver.lambda_consts(), solver.delta_consts(), solver.force_consts(dt),
+                                {sp.iterations, sp.iterations, 0.0f}).ok());
   std::vector<Vec3f> x, v;
   EXPECT_TRUE((*dev)->get_state(x, v).ok());
   r.gx = by_id(start, x), r.gv = by_id(start, v), r.cx = by_id(cpu, cpu.position), r.cv = by_id(cpu, cpu.velocity);
@@ -384,6 +385,41 @@ TEST(GpuPbf, FramesTakeTheCpuSubstepsAndTrackItsPositions) {
   // Float differences grow over a frame's sub-steps (a splash is chaotic), so the bound is on the bulk.
   EXPECT_LT(dx[dx.size() / 2], 1e-3);
   EXPECT_LT(dx[dx.size() * 9 / 10], 1e-2);
+  expect_silent(*ctx);
+}
+
+// The CPU's stopping rule on the device: at least `iterations` sweeps, more while the mean compression is above
+// max_density_error (up to max_iterations), decided on the device after each sweep. A block resting on the floor
+// after falling needs more than the minimum; both paths run as many sweeps and end as compressed.
+TEST(GpuPbf, MoreSweepsWhileCompressedAsTheCpu) {
+  sim::SolverParams sp;
+  sp.particle_radius = 0.008f;
+  sp.surface_tension = 0.0f, sp.vorticity = 0.0f;
+  sp.max_density_error = 3e-4f;  // tighter than the default (0.5 %), so that the rule asks for more sweeps
+  const sim::Domain dom{Vec3f::Zero(), Vec3f(0.5f, 0.5f, 0.8f)};
+  const sim::ParticleSet start = dropped_block(sp, dom);
+  ASSERT_GT(sp.max_iterations, sp.iterations);
+  sim::ParticleSet cpu = start;
+  sim::PbfSolver solver(sp, dom);
+  solver.set_cluster_kernels(true);
+  sim::NoController none;
+  auto c = solver.advance(cpu, 0.2, 1.0 / 60.0, none);
+  ASSERT_TRUE(c.has_value());
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
+  auto g = (*dev)->advance(solver, 1.0 / 60.0);
+  ASSERT_TRUE(g.has_value()) << g.error().message;
+  std::printf("one frame of %d sub-steps: CPU %ld sweeps, mean compression %.5f (largest %.4f); GPU %ld sweeps, %.5f (%.4f)\n",
+              c->substeps, c->times.iterations, c->density_error_mean, c->density_error_max, g->sweeps,
+              g->density_error_mean, g->density_error_max);
+  EXPECT_GT(c->times.iterations, long(c->substeps) * sp.iterations);  // the rule asked for more than the minimum
+  EXPECT_NEAR(double(g->sweeps), double(c->times.iterations), 0.05 * double(c->times.iterations));
+  EXPECT_NEAR(g->density_error_mean, c->density_error_mean, 0.1 * c->density_error_mean);
+  EXPECT_NEAR(g->density_error_max, c->density_error_max, 0.1 * c->density_error_max);
+  EXPECT_LE(g->density_error_mean, double(sp.max_density_error) * 1.0001);
   expect_silent(*ctx);
 }
 

@@ -13,7 +13,7 @@ layout(push_constant) uniform Constants {
                      // force and update passes: gravity xyz, w: Δt
   vec4 wall_lo;      // xyz: the walls' lower corner, w: m/ρ0
   vec4 wall_hi;      // xyz: the walls' upper corner
-  vec4 k3;           // force pass: x: XSPH η/Δt, y: m · Poly6 k
+  vec4 k3;           // force pass: x: XSPH η/Δt, y: m · Poly6 k; z: the least sweeps, w: the target mean compression
 } C;
 #endif
 

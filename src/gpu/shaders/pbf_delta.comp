@@ -10,10 +10,12 @@ layout(std430, binding = 2) readonly buffer Start { uint start[]; };
 layout(std430, binding = 3) readonly buffer Items { uint items[]; };
 layout(std430, binding = 4) readonly buffer Lambda { float lambda[]; };
 layout(std430, binding = 5) writeonly buffer Next { vec4 next[]; };
+// Skipped once the sub-step's sweeps are done (density_decide.comp).
+layout(std430, binding = 6) readonly buffer SweepState { uint done; uint sweeps; float mean; uint max_bits; uint total; float last_max; } state;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
-  if (i >= uint(C.grid_dims.w)) return;
+  if (state.done != 0u || i >= uint(C.grid_dims.w)) return;
   const float h = C.k0.x, h2 = C.k0.y;
   const float kgrad = C.k2.x, w_ratio = C.k2.y, scorr_c = C.k2.z;
   const int scorr_n = int(C.k2.w);

@@ -11,10 +11,12 @@ layout(std430, binding = 2) readonly buffer Start { uint start[]; };
 layout(std430, binding = 3) readonly buffer Items { uint items[]; };
 layout(std430, binding = 4) writeonly buffer Density { float density[]; };
 layout(std430, binding = 5) writeonly buffer Lambda { float lambda[]; };
+// Skipped once the sub-step's sweeps are done (density_decide.comp).
+layout(std430, binding = 6) readonly buffer SweepState { uint done; uint sweeps; float mean; uint max_bits; uint total; float last_max; } state;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
-  if (i >= uint(C.grid_dims.w)) return;
+  if (state.done != 0u || i >= uint(C.grid_dims.w)) return;
   const float h = C.k0.x, h2 = C.k0.y, poly6_k = C.k0.z, w0 = C.k0.w;
   const float mass = C.k1.x, rho0 = C.k1.y, epsilon = C.k1.z, cgrad = C.k1.w;
   const vec3 xi = pos[i].xyz;
