@@ -1,11 +1,13 @@
 #include "gpu/pbf_device.h"
 
 #include "gpu/shaders.h"
+#include "sim/surface_tension.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <cstring>
 
 namespace ff::gpu {
@@ -104,6 +106,12 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->check_, DeviceBuffer::create(ctx, 8));
   FF_TRY(d->accel_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->partial_, DeviceBuffer::create(ctx, groups(n, 256) * 4));
+  FF_TRY(d->id_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->st_class_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->st_normal_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->st_curv_, DeviceBuffer::create(ctx, u));
+  FF_TRY(d->points_, DeviceBuffer::create(ctx, 16 * 128));
+  d->points_cap_ = 128;
   FF_TRY(d->state_, DeviceBuffer::create(ctx, kStateBytes));
   FF_TRY(d->count_k_, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&d->pos_, &d->cell_, &d->count_}));
   FF_TRY(d->scan_k_, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&d->count_, &d->start_}));
@@ -117,6 +125,10 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->copy_k_, Kernel::create(ctx, "pbf_copy", shaders::pbf_copy(), {&d->next_, &d->pos_, &d->state_}));
   FF_TRY(d->error_k_, Kernel::create(ctx, "density_error", shaders::density_error(), {&d->density_, &d->partial_, &d->state_}));
   FF_TRY(d->decide_k_, Kernel::create(ctx, "density_decide", shaders::density_decide(), {&d->partial_, &d->state_}));
+  FF_CHECK(d->make_surface_kernels());
+  std::vector<std::uint32_t> ids(n);
+  for (std::size_t i = 0; i < n; ++i) ids[i] = static_cast<std::uint32_t>(i);
+  FF_CHECK(d->id_.upload(ids.data(), n * 4));
   FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->accel_}));
   FF_TRY(d->predict_k_, Kernel::create(ctx, "pbf_predict", shaders::pbf_predict(), {&d->x_, &d->vel_, &d->accel_, &d->pos_}));
@@ -290,7 +302,7 @@ Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const 
 
 template <class Stamp>
 void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
-                               const Sweeps& sweeps, Stamp&& stamp) const {
+                               const sim::PbfForceConsts& fk, const Sweeps& sweeps, Stamp&& stamp) const {
   reset_sweeps(cb, false);
   stamp(cb);
   // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
@@ -305,6 +317,7 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   compute_barrier(cb);
   force_k_.dispatch(cb, &cf, groups(n_, 128));
   compute_barrier(cb);
+  if (fk.st_sigma > 0.0f) record_surface_tension(cb, fk, lk_);
   if (controller_) controller_->record_accelerations(cb, dt);
   predict_k_.dispatch(cb, &cs, groups(n_, 256));  // x* (the x buffer was copied into it for the grid)
   compute_barrier(cb);
@@ -318,6 +331,8 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
 Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                           const Sweeps& sweeps, PassTimes* times) {
   const int iterations = std::max(sweeps.iterations, sweeps.max_iterations);
+  if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
+  lk_ = lk;
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
   Constants c = make_constants(grid_, n_, &lk, &dk);
@@ -332,7 +347,7 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
     vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
-    record_substep(cb, c, cf, cs, sweeps, stamp);
+    record_substep(cb, c, cf, cs, fk, sweeps, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
 }
@@ -368,6 +383,107 @@ Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& point
   return g;
 }
 
+Status PbfDevice::make_surface_kernels() {
+  Context& ctx = *ctx_;
+  FF_TRY(st_estimate_k_, Kernel::create(ctx, "st_estimate", shaders::st_estimate(),
+                                        {&pos_, &cell_, &start_, &items_, &id_, &points_, &st_class_, &st_normal_, &st_curv_}));
+  FF_TRY(st_smooth_k_, Kernel::create(ctx, "st_smooth", shaders::st_smooth(),
+                                      {&pos_, &cell_, &start_, &items_, &st_class_, &st_normal_, &st_curv_, &accel_}));
+  return {};
+}
+
+Status PbfDevice::set_ids(std::span<const Index> id) {
+  if (id.size() != n_) return param_error(fmt::format("GPU PBF: {} ids for {} particles", id.size(), n_));
+  const std::vector<std::uint32_t> ids(id.begin(), id.end());
+  return id_.upload(ids.data(), n_ * 4);
+}
+
+// The spherical Fibonacci set of `n` points (sim/surface_tension.cpp, prepare_points, in double as there), on the
+// device; the kernels that read it are bound again when the buffer grows.
+Status PbfDevice::prepare_points(int n) {
+  if (n == points_n_) return {};
+  const auto count = static_cast<std::size_t>(n);
+  if (count > points_cap_) {
+    points_cap_ = count;
+    FF_TRY(points_, DeviceBuffer::create(*ctx_, 16 * points_cap_));
+    FF_CHECK(make_surface_kernels());
+  }
+  std::vector<float> p(4 * count, 0.0f);
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (std::size_t k = 0; k < count; ++k) {
+    const double z = 1.0 - (2.0 * double(k) + 1.0) / n, rho = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * double(k);
+    p[4 * k] = static_cast<float>(rho * std::cos(phi));
+    p[4 * k + 1] = static_cast<float>(rho * std::sin(phi));
+    p[4 * k + 2] = static_cast<float>(z);
+  }
+  FF_CHECK(points_.upload(p.data(), p.size() * 4));
+  points_n_ = n;
+  return {};
+}
+
+namespace {
+
+// The push-constant block of shaders/surface.glsl, padded to 128 bytes.
+struct SurfaceConstants {
+  float grid_lo[4];
+  std::int32_t grid_dims[4];
+  float s0[4];          // h, r2/r1, classifier k, d_c
+  std::uint32_t s1[4];  // key low, key high, points
+  float s2[4];          // τ, −σ/m, κ scale, κ shift
+  float pad[12];
+};
+static_assert(sizeof(SurfaceConstants) == kPushConstantBytes, "shaders/surface.glsl's block, padded to 128 bytes");
+
+}  // namespace
+
+void PbfDevice::record_surface_tension(VkCommandBuffer cb, const sim::PbfForceConsts& fk, const sim::PbfLambdaConsts& lk) const {
+  const sim::SurfaceTensionParams st;  // r2/r1, τ and the classifier: the CPU's defaults
+  SurfaceConstants k{};
+  k.grid_lo[0] = grid_.lo.x(), k.grid_lo[1] = grid_.lo.y(), k.grid_lo[2] = grid_.lo.z(), k.grid_lo[3] = 1.0f / grid_.cell;
+  for (int a = 0; a < 3; ++a) k.grid_dims[a] = grid_.dims[static_cast<std::size_t>(a)];
+  k.grid_dims[3] = static_cast<std::int32_t>(n_);
+  k.s0[0] = lk.h, k.s0[1] = st.r2_ratio, k.s0[2] = st.class_k, k.s0[3] = st.class_d;
+  k.s1[0] = static_cast<std::uint32_t>(fk.st_key), k.s1[1] = static_cast<std::uint32_t>(fk.st_key >> 32);
+  k.s1[2] = static_cast<std::uint32_t>(points_n_);
+  const double ratio = st.r2_ratio;
+  k.s2[0] = st.tau, k.s2[1] = -fk.st_sigma / lk.mass;
+  k.s2[2] = static_cast<float>(-2.0 / double(lk.h) / std::sqrt(1.0 - ratio * ratio));
+  k.s2[3] = static_cast<float>(std::asin(ratio));
+  st_estimate_k_.dispatch(cb, &k, groups(n_, 64));
+  compute_barrier(cb);
+  st_smooth_k_.dispatch(cb, &k, groups(n_, 128));
+  compute_barrier(cb);
+}
+
+Result<PbfDevice::SurfaceResult> PbfDevice::surface_tension_only(const sim::PbfLambdaConsts& lk,
+                                                                const sim::PbfForceConsts& fk) {
+  if (!(fk.st_sigma > 0.0f)) return param_error("GPU surface tension: σ is 0");
+  FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
+  const Constants c = make_constants(grid_, n_, &lk, nullptr);
+  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    const VkBufferCopy all{0, 0, n_ * 16};
+    vkCmdCopyBuffer(cb, x_.handle(), pos_.handle(), 1, &all);
+    vkCmdFillBuffer(cb, accel_.handle(), 0, VK_WHOLE_SIZE, 0);
+    compute_barrier(cb);
+    record_grid(cb, &c);
+    record_surface_tension(cb, fk, lk);
+  }));
+  SurfaceResult r;
+  std::vector<std::uint32_t> cls(n_);
+  std::vector<float> nrm(4 * n_), acc(4 * n_);
+  r.curv.resize(n_);
+  FF_CHECK(st_class_.download(cls.data(), n_ * 4));
+  FF_CHECK(st_normal_.download(nrm.data(), n_ * 16));
+  FF_CHECK(st_curv_.download(r.curv.data(), n_ * 4));
+  FF_CHECK(accel_.download(acc.data(), n_ * 16));
+  r.cls.assign(cls.begin(), cls.end());
+  for (std::size_t i = 0; i < n_; ++i) {
+    r.normal.emplace_back(nrm[4 * i], nrm[4 * i + 1], nrm[4 * i + 2]);
+    r.accel.emplace_back(acc[4 * i], acc[4 * i + 1], acc[4 * i + 2]);
+  }
+  return r;
+}
+
 Result<PbfDevice::Check> PbfDevice::check() {
   const Constants c = make_constants(grid_, n_, nullptr, nullptr);
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
@@ -383,7 +499,7 @@ Result<PbfDevice::Check> PbfDevice::check() {
   return Check{std::sqrt(static_cast<double>(v2)), r[1] == 0xFFFFFFFFu ? n_ : static_cast<std::size_t>(r[1])};
 }
 
-Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double frame_dt) {
+Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time, double frame_dt) {
   const auto blown = [](std::size_t i, int step) {
     return numerical_error(fmt::format("simulation blew up in sub-step {} on the GPU: particle {} has a non-finite "
                                        "position or velocity", step, i));
@@ -393,7 +509,9 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double fram
   const sim::SubstepPlan plan = sim::plan_substeps(solver.params(), before.max_speed, frame_dt);
   const sim::PbfLambdaConsts lk = solver.lambda_consts();
   const sim::PbfDeltaConsts dk = solver.delta_consts();
-  const sim::PbfForceConsts fk = solver.force_consts(plan.dt);
+  sim::PbfForceConsts fk = solver.force_consts(plan.dt);
+  if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, plan.dt)));
+  lk_ = lk;
   const sim::SolverParams& sp = solver.params();
   const Sweeps sweeps{sp.iterations, sp.max_iterations, sp.max_density_error};
   Constants c = make_constants(grid_, n_, &lk, &dk);
@@ -403,7 +521,10 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double fram
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
     compute_barrier(cb);
-    for (int s = 0; s < plan.steps; ++s) record_substep(cb, c, cf, cs, sweeps, [](VkCommandBuffer) {});
+    for (int s = 0; s < plan.steps; ++s) {
+      fk.st_key = sim::surface_tension_step_key(time + s * double(plan.dt));  // the CPU's key for this sub-step
+      record_substep(cb, c, cf, cs, fk, sweeps, [](VkCommandBuffer) {});
+    }
   }));
   FF_TRY(const Check after, check());
   if (after.first_bad < n_) return blown(after.first_bad, plan.steps);

@@ -84,6 +84,8 @@ class PbfDevice {
   Status get_lambda(std::vector<float>& lambda) const;
   /// The particles' state between sub-steps: positions x and velocities v (n each).
   Status set_state(std::span<const Vec3f> x, std::span<const Vec3f> v);
+  /// The particles' ids (sim::ParticleSet::id): their random rotations in the surface tension (default 0, 1, …).
+  Status set_ids(std::span<const Index> id);
   Status get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const;
   /// The sweeps of a sub-step: at least `iterations`, then more while the mean compression is above `target`, up
   /// to `max_iterations` (sim::PbfSolver::substep's rule); the controller corrects in the first `iterations` only.
@@ -100,13 +102,21 @@ class PbfDevice {
   /// the largest speed, reduced on the device), each a substep() with `solver`'s constants and a fixed
   /// params().iterations sweeps. A non-finite position or velocity, before or after the frame, is an Error naming
   /// the lowest such particle index.
-  Result<DeviceFrame> advance(const sim::PbfSolver& solver, double frame_dt);
+  Result<DeviceFrame> advance(const sim::PbfSolver& solver, double time, double frame_dt);
   /// The largest |v| of the state, m/s, and the lowest index with a non-finite x or v (none: size()).
   struct Check {
     double max_speed = 0;
     std::size_t first_bad = 0;
   };
   Result<Check> check();
+  /// The surface tension alone on the state's x (for tests): each particle's class (sim::SurfaceClass), Monte-Carlo
+  /// normal and curvature, and the acceleration it adds (from zero).
+  struct SurfaceResult {
+    std::vector<std::uint8_t> cls;
+    std::vector<Vec3f> normal, accel;
+    std::vector<float> curv;
+  };
+  Result<SurfaceResult> surface_tension_only(const sim::PbfLambdaConsts& lk, const sim::PbfForceConsts& fk);
   /// The grid of the last solve: start (cells + 1 offsets into items) and items (particle indices by cell, then
   /// by index).
   Status get_grid(std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& items) const;
@@ -149,7 +159,9 @@ class PbfDevice {
   // One sub-step: c the sweeps' constants, cf the force pass's, cs the prediction's and update's.
   template <class Stamp>
   void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
-                      const Sweeps& sweeps, Stamp&& stamp) const;
+                      const sim::PbfForceConsts& fk, const Sweeps& sweeps, Stamp&& stamp) const;
+  void record_surface_tension(VkCommandBuffer cb, const sim::PbfForceConsts& fk, const sim::PbfLambdaConsts& lk) const;
+  sim::PbfLambdaConsts lk_;  // of the sub-step being recorded (h and m for the surface tension)
   // The sweeps of a sub-step, each followed by x* ← next and the density error; `stamp` after each pass (timestamps
   // when timed). With dt > 0 the controller's correction comes before each of the first sweeps.iterations.
   template <class Stamp>
@@ -162,6 +174,13 @@ class PbfDevice {
   GridSpec grid_;
   DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_, accel_;
   DeviceBuffer partial_, state_;  // the density error's per-workgroup sums; the sweeps' state (density_decide.comp)
+  // Surface tension: the particles' ids (their random rotations), the point set, each particle's class, n̂, κ.
+  DeviceBuffer id_, points_, st_class_, st_normal_, st_curv_;
+  int points_n_ = 0;         // points in points_ now
+  std::size_t points_cap_ = 0;
+  Kernel st_estimate_k_, st_smooth_k_;
+  Status prepare_points(int n);
+  Status make_surface_kernels();
   Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, predict_k_, update_k_, check_k_;
   Kernel copy_k_, error_k_, decide_k_;
   const DeviceController* controller_ = nullptr;

@@ -137,5 +137,17 @@ std::span<const std::uint32_t> density_decide() {
   };
   return kWords;
 }
+std::span<const std::uint32_t> st_estimate() {
+  static constexpr std::uint32_t kWords[] = {
+#include "st_estimate.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> st_smooth() {
+  static constexpr std::uint32_t kWords[] = {
+#include "st_smooth.inc"
+  };
+  return kWords;
+}
 
 }  // namespace ff::gpu::shaders

@@ -35,10 +35,10 @@ class CpuStepper final : public FrameStepper {
 
 class GpuStepper final : public FrameStepper {
  public:
-  Result<sim::FrameStats> advance(sim::ParticleSet& p, double, double frame_dt) override {
+  Result<sim::FrameStats> advance(sim::ParticleSet& p, double time, double frame_dt) override {
     if (p.size() != fluid_->size())
       return param_error(fmt::format("GPU: the run has {} particles, the device {}", p.size(), fluid_->size()));
-    FF_TRY(const gpu::DeviceFrame f, fluid_->advance(solver_, frame_dt));
+    FF_TRY(const gpu::DeviceFrame f, fluid_->advance(solver_, time, frame_dt));
     FF_CHECK(fluid_->get_state(p.position, p.velocity));
     if (control_) {
       FF_CHECK(control_->get_bound(p.bound_control));
@@ -70,6 +70,7 @@ class GpuStepper final : public FrameStepper {
     FF_TRY(const gpu::GridSpec grid, gpu::GridSpec::covering(dom.min, dom.max, s->solver_.lambda_consts().h * 1.1f));
     FF_TRY(s->fluid_, gpu::PbfDevice::create(*s->context_, p.size(), grid));
     FF_CHECK(s->fluid_->set_state(p.position, p.velocity));
+    FF_CHECK(s->fluid_->set_ids(p.id));
     if (spec.name == "adaptive" && !targets.empty()) {
       FF_TRY(s->control_, gpu::AdaptiveDevice::create(*s->fluid_, std::move(targets), ctx,
                                                       spec.get<control::AdaptiveParams>()));
@@ -91,7 +92,6 @@ class GpuStepper final : public FrameStepper {
 // What of the scene the GPU path does not do yet ("" when it does all of it).
 std::string gpu_gap(const sim::SolverParams& sp, const control::ControllerSpec& spec) {
   if (spec.name != "adaptive" && spec.name != "none") return fmt::format("the controller '{}'", spec.name);
-  if (sp.surface_tension > 0.0f) return "surface tension (solver.surface_tension > 0)";
   if (sp.vorticity > 0.0f) return "vorticity confinement (solver.vorticity > 0)";
   return {};
 }

@@ -5,6 +5,8 @@
 #include "core/clusters.h"
 #include "core/types.h"
 
+#include <cstdint>
+
 namespace ff::sim {
 
 struct PbfLambdaConsts {
@@ -33,6 +35,10 @@ struct PbfForceConsts {
   float mass_poly6_k = 0;         // m · Poly6 k: (m/ρ_j) W_ij = mass_poly6_k (h² − r²)³ / ρ_j
   // Air drag (sim/drag.h, DragModel's coefficients); drag_acc = 0: none.
   float drag_L = 0, drag_y = 0, drag_re = 0, drag_d2 = 0, drag_acc = 0;
+  // Surface tension (sim/surface_tension.h): σ at this spacing (0: none), C_sd, and the sub-step's key
+  // (surface_tension_step_key of its start time: the caller's, it depends on the time).
+  float st_sigma = 0, st_samples_per_second = 0;
+  std::uint64_t st_key = 0;
 };
 
 /// λ at x* (s.x/y/z): density[point] per particle, lambda in s's padded layout (0 at padding).

@@ -328,7 +328,7 @@ PbfDeltaConsts PbfSolver::delta_consts() const {
   return dk;
 }
 
-// g + XSPH and air drag as external_accelerations() applies them (not surface tension).
+// g + XSPH, air drag and surface tension as external_accelerations() applies them.
 PbfForceConsts PbfSolver::force_consts(float dt) const {
   PbfForceConsts fk;
   fk.gravity = params_.gravity, fk.dt = dt, fk.xsph = params_.viscosity / dt, fk.mass_poly6_k = mass_ * poly6_.k;
@@ -338,6 +338,11 @@ PbfForceConsts PbfSolver::force_consts(float dt) const {
     dp.spacing = params_.spacing(), dp.mass = mass_;
     const DragModel::Coefficients c = DragModel(dp).coefficients();
     fk.drag_L = c.L, fk.drag_y = c.y_coeff, fk.drag_re = c.re_coeff, fk.drag_d2 = c.d2, fk.drag_acc = c.acc;
+  }
+  if (params_.surface_tension > 0.0f) {  // σ scaled to this spacing as external_accelerations() scales it
+    const float dr = params_.spacing() / SolverParams::kSurfaceTensionRefSpacing;
+    fk.st_sigma = params_.surface_tension * dr * dr;
+    fk.st_samples_per_second = params_.surface_tension_samples;
   }
   return fk;
 }

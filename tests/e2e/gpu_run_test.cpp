@@ -16,8 +16,8 @@ namespace fs = std::filesystem;
 using namespace e2e;
 using nlohmann::json;
 
-// A sphere of radius 0.25 m as the target, ~1500 particles, without the forces the device does not do yet.
-fs::path forming_scene(const fs::path& dir, const std::string& solver = R"("surface_tension": 0)") {
+// A sphere of radius 0.25 m as the target, ~1500 particles, the solver's defaults (surface tension and drag on).
+fs::path forming_scene(const fs::path& dir, const std::string& solver = R"("viscosity": 0.01)") {
   test::write_obj(dir / "sphere.obj", test::sphere_mesh(0.25f, 3));
   return write_scene(dir, R"({
     "targets": [{"mesh": "sphere.obj"}],
@@ -75,10 +75,10 @@ TEST(GpuRun, FormsAsTheCpuDoesRepeatsBitForBitAndResumes) {
 
 TEST(GpuRun, WhatTheGpuDoesNotDoYetIsAOneLineErrorAndAutoFallsBack) {
   const auto dir = test::temp_dir("gpu_gaps");
-  const fs::path scene = forming_scene(dir, R"("viscosity": 0.01)");  // surface tension at its default
+  const fs::path scene = forming_scene(dir, R"("vorticity": 0.5)");  // not on the device yet
   const auto r = run({"-q", "run", scene.string(), "-o", (dir / "out").string(), "--device", "gpu", "--frames", "2"});
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("does not do surface tension"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not do vorticity"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out")) << "checked before anything is written";
   const auto bad = run({"run", scene.string(), "-o", (dir / "bad").string(), "--device", "tpu"});

@@ -71,7 +71,7 @@ TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
     ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
     ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
     if (controlled) (*dev)->set_controller(ctl->get());
-    auto frame = (*dev)->advance(solver, 1.0 / 60.0);
+    auto frame = (*dev)->advance(solver, 40 / 60.0, 1.0 / 60.0);
     ASSERT_TRUE(frame.has_value()) << frame.error().message;
     std::vector<Vec3f> x, v;
     ASSERT_TRUE((*dev)->get_state(x, v).ok());
@@ -143,7 +143,7 @@ TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
   ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
   (*dev)->set_controller(ctl->get());
   // The field after the first frame, against the nearest seed by brute force.
-  ASSERT_TRUE((*dev)->advance(solver, 1.0 / 60.0).has_value());
+  ASSERT_TRUE((*dev)->advance(solver, 0.0, 1.0 / 60.0).has_value());
   std::vector<Index> seeds;
   std::vector<float> fill;
   ASSERT_TRUE((*ctl)->get_seeds(seeds).ok());
@@ -170,7 +170,7 @@ TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
   std::printf("seed field: %zu cells, %zu with a seed, %zu not the nearest (all within a cell's diagonal)\n", cells,
               seeded, worse);
   EXPECT_GT(seeded, 0u);
-  for (int f = 1; f < kFrames; ++f) ASSERT_TRUE((*dev)->advance(solver, 1.0 / 60.0).has_value());
+  for (int f = 1; f < kFrames; ++f) ASSERT_TRUE((*dev)->advance(solver, f / 60.0, 1.0 / 60.0).has_value());
   std::vector<Index> bound;
   ASSERT_TRUE((*ctl)->get_bound(bound).ok());
   std::size_t gpu_held = 0;

@@ -7,6 +7,7 @@
 #include "gpu/pbf_device.h"
 #include "sim/emitter.h"
 #include "sim/pbf_solver.h"
+#include "sim/surface_tension.h"
 
 #include <gtest/gtest.h>
 
@@ -257,9 +258,12 @@ SubstepRun run_substeps(const sim::SolverParams& sp, const sim::Domain& dom, con
   EXPECT_TRUE(dev.has_value()) << dev.error().message;
   if (!dev) return r;
   EXPECT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
-  for (int s = 0; s < steps; ++s)
-    EXPECT_TRUE((*dev)->substep(solver.lambda_consts(), solver.delta_consts(), solver.force_consts(dt),
-                                {sp.iterations, sp.iterations, 0.0f}).ok());
+  EXPECT_TRUE((*dev)->set_ids(start.id).ok());  // the surface tension's random rotations follow the ids
+  for (int s = 0; s < steps; ++s) {
+    sim::PbfForceConsts fk = solver.force_consts(dt);
+    fk.st_key = sim::surface_tension_step_key(0.2 + s * double(dt));  // the CPU sub-step's key
+    EXPECT_TRUE((*dev)->substep(solver.lambda_consts(), solver.delta_consts(), fk, {sp.iterations, sp.iterations, 0.0f}).ok());
+  }
   std::vector<Vec3f> x, v;
   EXPECT_TRUE((*dev)->get_state(x, v).ok());
   r.gx = by_id(start, x), r.gv = by_id(start, v), r.cx = by_id(cpu, cpu.position), r.cv = by_id(cpu, cpu.velocity);
@@ -308,6 +312,88 @@ TEST(GpuPbf, SubstepsTrackTheCpuSolver) {
 
 // Air drag where it is strong: spray (particles with few or no neighbours) flying at 5 m/s, at the largest drag
 // scale. The drag slows it measurably, and the device's drag matches the CPU's.
+// Surface tension (Zorilla et al.: classifier, Monte-Carlo normal and curvature with the CPU's random rotations bit for
+// bit, smoothing) on a splashing block at r = 8 mm, where σ/m is large: the device's sub-steps track the CPU's, and
+// the surface tension moves the fluid far more than the two paths differ.
+// The surface tension's per-particle results against sim::SurfaceTension on the same particles, ids and key.
+TEST(GpuPbf, SurfaceTensionPerParticleMatchesTheCpu) {
+  sim::SolverParams sp;
+  sp.particle_radius = 0.008f;
+  const sim::Domain dom{Vec3f::Zero(), Vec3f(0.5f, 0.5f, 0.8f)};
+  sim::ParticleSet p = dropped_block(sp, dom);
+  sim::PbfSolver solver(sp, dom);
+  solver.compute_densities(p);  // neighbour lists on p.position (p is re-sorted by cell)
+  constexpr float kDt = 1.0f / 240.0f;
+  sim::PbfForceConsts fk = solver.force_consts(kDt);
+  fk.st_key = sim::surface_tension_step_key(0.25);
+  sim::SurfaceTensionParams st;
+  st.sigma = fk.st_sigma, st.samples_per_second = fk.st_samples_per_second, st.support = sp.support();
+  st.mass = solver.particle_mass();
+  sim::SurfaceTension cpu;
+  std::vector<Vec3f> a(p.size(), Vec3f::Zero());
+  cpu.add_accelerations(p.position, p.id, solver.neighbors(), st, kDt, fk.st_key, a);
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  auto dev = PbfDevice::create(*ctx, p.size(), GridSpec::covering(dom.min, dom.max, sp.support() * 1.1f).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(p.position, p.velocity).ok());
+  ASSERT_TRUE((*dev)->set_ids(p.id).ok());
+  auto g = (*dev)->surface_tension_only(solver.lambda_consts(), fk);
+  ASSERT_TRUE(g.has_value()) << g.error().message;
+  std::size_t surface = 0, same_class = 0;
+  double worst_n = 0, worst_k = 0, worst_a = 0, largest_a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    same_class += g->cls[i] == cpu.classes()[i];
+    if (cpu.classes()[i] != 1 || g->cls[i] != 1) continue;
+    ++surface;
+    worst_n = std::max(worst_n, double((g->normal[i] - cpu.raw_normals()[i]).norm()));
+    worst_k = std::max(worst_k, double(std::abs(g->curv[i] - cpu.raw_curvatures()[i]) * sp.support()));
+    worst_a = std::max(worst_a, double((g->accel[i] - a[i]).norm()));
+    largest_a = std::max(largest_a, double(a[i].norm()));
+  }
+  std::printf("%zu particles, %zu surface; same class %zu; largest |Δn̂| %.2e, |Δκ|·h %.2e, |Δa| %.2e of up to %.2e m/s²\n",
+              p.size(), surface, same_class, worst_n, worst_k, worst_a, largest_a);
+  EXPECT_GT(surface, p.size() / 10);
+  EXPECT_GE(same_class, p.size() - p.size() / 1000);
+  EXPECT_LT(worst_n, 1e-3);
+  EXPECT_LT(worst_k, 1e-3);
+  EXPECT_LT(worst_a, 1e-3 * largest_a);
+  expect_silent(*ctx);
+}
+
+TEST(GpuPbf, SurfaceTensionTracksTheCpu) {
+  sim::SolverParams sp;
+  sp.particle_radius = 0.008f;
+  sp.vorticity = 0.0f;
+  ASSERT_GT(sp.surface_tension, 0.0f);
+  const sim::Domain dom{Vec3f::Zero(), Vec3f(0.5f, 0.5f, 0.8f)};
+  const sim::ParticleSet start = dropped_block(sp, dom);
+  sp.max_iterations = sp.iterations;
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  constexpr float kDt = 1e-3f;
+  const SubstepRun with = run_substeps(sp, dom, start, kDt, 3, *ctx);
+  sp.surface_tension = 0.0f;
+  const SubstepRun without = run_substeps(sp, dom, start, kDt, 3, *ctx);
+  ASSERT_EQ(with.gx.size(), start.size());
+  std::vector<double> dx(start.size()), effect(start.size());
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    dx[i] = (with.gx[i] - with.cx[i]).norm() / sp.spacing();
+    effect[i] = (with.cx[i] - without.cx[i]).norm() / sp.spacing();
+  }
+  std::sort(dx.begin(), dx.end());
+  std::sort(effect.begin(), effect.end());
+  const double median = dx[dx.size() / 2], p99 = dx[dx.size() * 99 / 100], worst = dx.back();
+  std::printf("surface tension, 3 sub-steps: GPU − CPU |Δx|/d median %.2e, 99th %.2e, largest %.2e; its own effect on "
+              "the CPU: 99th %.2e, largest %.2e\n",
+              median, p99, worst, effect[effect.size() * 99 / 100], effect.back());
+  EXPECT_LT(median, 1e-5);
+  EXPECT_LT(p99, 1e-4);
+  EXPECT_LT(worst, 1e-2);
+  EXPECT_GT(effect.back(), 100 * p99);
+  expect_silent(*ctx);
+}
+
 TEST(GpuPbf, AirDragOnSprayMatchesTheCpu) {
   sim::SolverParams sp;
   sp.particle_radius = 0.01f;
@@ -367,7 +453,7 @@ TEST(GpuPbf, FramesTakeTheCpuSubstepsAndTrackItsPositions) {
   for (int f = 0; f < 2; ++f) {
     auto c = solver.advance(cpu, 0.2 + f / 60.0, 1.0 / 60.0, none);
     ASSERT_TRUE(c.has_value());
-    auto g = (*dev)->advance(solver, 1.0 / 60.0);
+    auto g = (*dev)->advance(solver, 0.2 + f / 60.0, 1.0 / 60.0);
     ASSERT_TRUE(g.has_value()) << g.error().message;
     std::printf("frame %d: CPU %d sub-steps of %.5f s, GPU %d of %.5f s (largest speed %.3f m/s)\n", f, c->substeps, c->dt,
                 g->substeps, double(g->dt), g->max_speed);
@@ -410,7 +496,7 @@ TEST(GpuPbf, MoreSweepsWhileCompressedAsTheCpu) {
   auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
-  auto g = (*dev)->advance(solver, 1.0 / 60.0);
+  auto g = (*dev)->advance(solver, 0.2, 1.0 / 60.0);
   ASSERT_TRUE(g.has_value()) << g.error().message;
   std::printf("one frame of %d sub-steps: CPU %ld sweeps, mean compression %.5f (largest %.4f); GPU %ld sweeps, %.5f (%.4f)\n",
               c->substeps, c->times.iterations, c->density_error_mean, c->density_error_max, g->sweeps,
@@ -437,7 +523,7 @@ TEST(GpuPbf, ABlowUpNamesTheParticle) {
   auto dev = PbfDevice::create(*ctx, x.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
   ASSERT_TRUE(dev.has_value());
   ASSERT_TRUE((*dev)->set_state(x, v).ok());
-  auto f = (*dev)->advance(solver, 1.0 / 60.0);
+  auto f = (*dev)->advance(solver, 0.0, 1.0 / 60.0);
   ASSERT_FALSE(f.has_value());
   EXPECT_NE(f.error().message.find("particle 37 "), std::string::npos) << f.error().message;
   expect_silent(*ctx);
