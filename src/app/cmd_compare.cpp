@@ -52,6 +52,9 @@ Command add_compare(CLI::App& app) {
   compare->add_option("--max-memory", o->max_memory,
                       "MiB each run may need, estimated before anything runs (overrides limits.max_memory_mb)")
       ->check(CLI::Range(1.0, 1e9));
+  compare->add_option("--device", o->compare.device, "cpu, gpu or auto, for every run (see fluidform run --help)")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
+      ->capture_default_str();
   compare->footer(pipeline::controllers_help());
   return {compare, [o] { return run_compare(*o); }};
 }

@@ -1,5 +1,7 @@
 #include "pipeline/compare.h"
 
+#include "pipeline/stepper.h"
+
 #include "pipeline/auto_scene.h"
 #include "pipeline/run_budget.h"
 
@@ -138,6 +140,7 @@ struct RunSetup {
   fs::path exe, scene;
   int frames = 0;
   std::optional<double> max_memory_mib;  // passed on to every run
+  std::string device;                    // passed on to every run
 };
 
 // Runs one controller in its own process into `dir` and reads its row from report.json and metrics.csv.
@@ -154,6 +157,7 @@ Result<CompareRow> run_controller(const RunSetup& setup, const control::Controll
                                       row.controller, "-o", dir.string(), "--no-mesh", "--frames",
                                       std::to_string(setup.frames)};
   if (setup.max_memory_mib) argv.insert(argv.end(), {"--max-memory", fmt::format("{}", *setup.max_memory_mib)});
+  argv.insert(argv.end(), {"--device", setup.device});
   const auto start = std::chrono::steady_clock::now();
   FF_TRY(const ChildExit ended, run_child(argv, "/dev/null", dir / "stderr.log"));
   row.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -314,8 +318,9 @@ std::vector<std::string> markdown_cells(const CompareRow& r) {
 }
 
 std::string table_markdown(const CompareTable& t) {
-  std::string s = fmt::format("**{}** ({}): {} particles, {} frames ({:.2f} s simulated), {} threads, {}\n\n", t.scene,
-                              t.scene_file, fixed(t.particles, 0), t.frames, t.frames / t.fps, t.threads, t.cpu);
+  std::string s = fmt::format("**{}** ({}): {} particles, {} frames ({:.2f} s simulated), {} threads, {}{}\n\n", t.scene,
+                              t.scene_file, fixed(t.particles, 0), t.frames, t.frames / t.fps, t.threads, t.cpu,
+                              t.device == "cpu" ? "" : ", --device " + t.device);
   const auto& cols = markdown_columns();
   s += "| " + fmt::format("{}", fmt::join(cols, " | ")) + " |\n|";
   for (std::size_t i = 0; i < cols.size(); ++i) s += i == 0 ? "---|" : "---:|";
@@ -368,7 +373,7 @@ json table_to_json(const CompareTable& t) {
                     {"e_fwd_all_m", num_json(r.e_fwd_all_m)},
                     {"wall_s", num_json(r.wall_seconds)}});
   return {{"scene", t.scene}, {"scene_file", t.scene_file}, {"frames", t.frames}, {"fps", t.fps},
-          {"particles", num_json(t.particles)}, {"threads", t.threads}, {"cpu", t.cpu}, {"rows", rows}};
+          {"particles", num_json(t.particles)}, {"threads", t.threads}, {"cpu", t.cpu}, {"device", t.device}, {"rows", rows}};
 }
 
 Result<CompareTable> table_from_json(const json& j) {
@@ -381,6 +386,7 @@ Result<CompareTable> table_from_json(const json& j) {
   t.particles = number(j, "particles");
   t.threads = j.value("threads", 0);
   t.cpu = j.value("cpu", std::string());
+  t.device = j.value("device", std::string("cpu"));
   for (const auto& e : j["rows"]) {
     if (!e.is_object()) return input_error("a compare table row is not an object");
     CompareRow r;
@@ -411,7 +417,13 @@ Result<CompareTable> table_from_json(const json& j) {
 Result<CompareTable> run_compare(const CompareOptions& o) {
   // Everything is checked before the output folder is touched.
   FF_TRY(const auto entries, resolve_controllers(o.controllers));
+  FF_TRY(const Device device, parse_device(o.device));
   FF_TRY(const scene::Scene scene, scene::load_scene(o.scene_file));
+  for (const auto* e : entries) {  // --device gpu with a controller the GPU path does not have: one line, up front
+    control::ControllerSpec spec = scene.controller;
+    spec.name = std::string(e->name);
+    FF_CHECK(check_device(device, scene.solver, spec));
+  }
   if (scene.targets.empty())
     return input_error(fmt::format("{}: the scene has no targets, so there is no shape to compare controllers on",
                                    o.scene_file.string()));
@@ -442,7 +454,8 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   table.fps = scene.output.fps;
   table.threads = core::thread_count();
   table.cpu = cpu_model();
-  const RunSetup setup{exe, fs::absolute(o.scene_file), frames, o.max_memory_mib};
+  table.device = o.device;
+  const RunSetup setup{exe, fs::absolute(o.scene_file), frames, o.max_memory_mib, o.device};
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const auto& e = *entries[k];
     spdlog::info("compare [{}/{}] {}: {} frames ...", k + 1, entries.size(), e.name, frames);

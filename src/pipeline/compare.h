@@ -22,6 +22,7 @@ struct CompareOptions {
   std::optional<int> frames;             ///< default: the scene's output.frames if it sets it, else kDefaultFrames
   std::filesystem::path exe;             ///< the fluidform binary; empty: /proc/self/exe
   std::optional<double> max_memory_mib;  ///< --max-memory: overrides scene.limits.max_memory_mb, for every run
+  std::string device = "cpu";            ///< --device, for every run (gpu: only controllers the GPU path has)
 };
 
 /// Run length when neither --frames nor the scene's output.frames says: 5 s at 60 fps. A scene without
@@ -49,6 +50,7 @@ struct CompareTable {
   double particles = NAN;  ///< fluid particles (from the first run that reported them)
   int threads = 0;
   std::string cpu;
+  std::string device = "cpu";  ///< --device the runs were given (each run's report.json names what ran)
   std::vector<CompareRow> rows;
 };
 
