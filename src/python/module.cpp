@@ -140,10 +140,11 @@ py::dict measure(const py::object& positions, const py::object& mesh, std::optio
 
 py::dict run(const py::object& scene_arg, const std::string& out, std::optional<int> frames,
              std::optional<std::string> controller, bool mesh, bool animation, int mesh_every, bool vdb, bool resume,
-             std::optional<double> max_memory, const py::object& progress) {
+             std::optional<double> max_memory, const std::string& device, const py::object& progress) {
   scene::Scene scene = load_scene_argument(scene_arg);
   pipeline::RunOptions opt;
   opt.out_dir = out;
+  opt.device = device;  // "cpu", "gpu" or "auto": checked by the run, its error names --device
   if (frames) {
     if (*frames < 1) raise(param_error(fmt::format("frames = {} must be ≥ 1", *frames)));
     opt.frames = frames;
@@ -174,6 +175,7 @@ py::dict run(const py::object& scene_arg, const std::string& out, std::optional<
   d["frame_seconds"] = s.mean_frame_seconds;
   d["peak_memory_mib"] = s.peak_memory_mib;
   d["controller"] = s.controller;
+  d["device"] = s.device;
   if (s.has_targets) {
     d["control_particles"] = s.control_particles;
     d["controlled"] = s.controlled;
@@ -279,13 +281,14 @@ controlled.)");
   m.def("run", &run, py::arg("scene"), py::kw_only(), py::arg("out") = "fluidform-out", py::arg("frames") = py::none(),
         py::arg("controller") = py::none(), py::arg("mesh") = true, py::arg("animation") = true,
         py::arg("mesh_every") = 0, py::arg("vdb") = false, py::arg("resume") = false, py::arg("max_memory") = py::none(),
-        py::arg("progress") = py::none(),
+        py::arg("device") = "cpu", py::arg("progress") = py::none(),
         R"(Runs a scene as `fluidform run` does, into the folder `out` (the same files).
 
 scene: a scene file path or a dict of scene keys (relative mesh paths from the working directory).
-frames, controller, mesh, animation, mesh_every, vdb, resume, max_memory (MiB): as the CLI's options.
+frames, controller, mesh, animation, mesh_every, vdb, resume, max_memory (MiB), device ('cpu', 'gpu' or 'auto'):
+as the CLI's options.
 progress: callback(what, done, total), e.g. ('forming', 60, 600); returning False cancels (raises Cancelled).
-Ctrl-C cancels too. Returns the run's summary as a dict (error_rate, inside, splash, frame_seconds, ...).)");
+Ctrl-C cancels too. Returns the run's summary as a dict (error_rate, inside, splash, frame_seconds, device, ...).)");
 
   m.def("set_log_level", &set_log_level, py::arg("level"),
         "The library's log level: 'trace', 'debug', 'info' (the CLI's), 'warn' (the module's default), 'error', 'off'.");

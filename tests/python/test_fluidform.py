@@ -256,6 +256,15 @@ def test_run_summary_and_outputs(tmp_path):
     assert s["controller"] == "adaptive" and s["mesh_ok"] and s["mesh_triangles"] > 0
     assert (tmp_path / "o" / "mesh" / "final.obj").is_file() and (tmp_path / "o" / "report.json").is_file()
     assert 0 <= s["inside"] <= 1 and np.isfinite(s["error_rate"])
+    assert s["device"] == "cpu"
+
+
+def test_run_on_the_gpu_device(tmp_path):
+    # Vulkan compute on the machine's device (lavapipe where there is no GPU; scripts/setup installs it).
+    s = ff.run(small_scene(), out=str(tmp_path / "g"), frames=5, mesh=False, device="gpu")
+    assert s["device"] != "cpu" and s["frames"] == 6
+    with pytest.raises(ValueError, match="--device"):
+        ff.run(small_scene(), out=str(tmp_path / "bad"), frames=1, mesh=False, device="tpu")
 
 
 def test_step_releases_the_gil(tmp_path):
