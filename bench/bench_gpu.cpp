@@ -1,6 +1,7 @@
 // bench_gpu: the GPU sub-step (gpu/pbf_device.h) per pass, from the device's timestamp queries, for a block of fluid of
 // 10k and 100k particles (or --particles); beside it, in the same run, the CPU solver's sub-step on the same particles
-// with the same work (sim::PbfSolver::substep: no controller, surface tension, drag or vorticity, a fixed sweep count),
+// with the same work (sim::PbfSolver::substep at the solver's defaults, surface tension and drag included, without a
+// controller, with a fixed sweep count; the "force" column holds ρ(x), the forces and the surface tension),
 // and what a GPU time follows from: the pairs within h, the candidates the 27 cells offer, and the bytes one sweep
 // reads and writes if nothing stays in a cache.
 //
@@ -12,6 +13,7 @@
 #include "gpu/pbf_device.h"
 #include "sim/emitter.h"
 #include "sim/pbf_solver.h"
+#include "sim/surface_tension.h"
 
 #include <fmt/format.h>
 
@@ -101,14 +103,15 @@ int main(int argc, char** argv) {
              "force", "λ", "Δx", "copy+err", "update", "sub-step", "frame", "CPU step", "pairs", "cand.", "MB/sweep", "dev MB");
   for (const std::size_t n_want : counts) {
     Block b = make_block(n_want);
-    b.sp.surface_tension = 0.0f, b.sp.drag = 0.0f, b.sp.vorticity = 0.0f;
+    b.sp.vorticity = 0.0f;
     b.sp.iterations = b.sp.max_iterations = iterations;
     const std::size_t n = b.x.size();
     const float dt = 1.0f / 120.0f;
     const sim::PbfSolver solver(b.sp, b.dom);
     const sim::PbfLambdaConsts lk = solver.lambda_consts();
     const sim::PbfDeltaConsts dk = solver.delta_consts();
-    const sim::PbfForceConsts fk = solver.force_consts(dt);
+    sim::PbfForceConsts fk = solver.force_consts(dt);
+    fk.st_key = sim::surface_tension_step_key(0.0);  // the CPU sub-step's (time 0)
     auto grid = gpu::GridSpec::covering(b.dom.min, b.dom.max, lk.h * 1.1f);
     if (!grid) return fmt::print(stderr, "bench_gpu: {}\n", grid.error().message), 1;
     auto dev = gpu::PbfDevice::create(**ctx, n, *grid);
