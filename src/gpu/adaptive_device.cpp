@@ -42,7 +42,6 @@ std::string unsupported(const std::vector<control::ControlTarget>& targets, cons
   if (params.kinematic) return "kinematic corrections (controller.adaptive.kinematic)";
   for (std::size_t t = 0; t < targets.size(); ++t) {
     const control::ControlTarget& c = targets[t];
-    if (c.motion.moving() || c.skin) return fmt::format("a moving target (target {} is keyframed or skinned)", t);
     if (!c.swaps.empty()) return fmt::format("a morphing target (target {})", t);
     if (!c.strength.keys.empty()) return fmt::format("a strength track (target {})", t);
     if (c.start > 0.0) return fmt::format("a target that starts later (target {} at {} s)", t, c.start);
@@ -58,11 +57,12 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   FF_CHECK(params.validate());
   if (const std::string what = unsupported(targets, params); !what.empty())
     return param_error("the GPU controller does not do " + what + " yet; run it with --device cpu");
-  control::ControlSamples samples;
-  FF_CHECK(samples.init(std::move(targets), "adaptive (GPU)",
-                        {.cell_order = false, .weights = params.weights, .normals = true, .velocities = false}));
-  if (samples.size() == 0) return input_error("adaptive (GPU): the targets have no control samples");
   std::unique_ptr<AdaptiveDevice> a(new AdaptiveDevice());
+  control::ControlSamples& samples = a->samples_;
+  FF_CHECK(samples.init(std::move(targets), "adaptive (GPU)",
+                        {.cell_order = false, .weights = params.weights, .normals = true, .velocities = true}));
+  if (samples.size() == 0) return input_error("adaptive (GPU): the targets have no control samples");
+  a->moving_ = samples.moving();
   a->fluid_ = &fluid;
   a->params_ = params;
   a->ctx_ = ctx;
@@ -88,6 +88,15 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   FF_TRY(a->s_coef_, DeviceBuffer::create(c, m * 4));
   FF_TRY(a->f_target_, DeviceBuffer::create(c, n * 4));
   FF_TRY(a->nearest_, DeviceBuffer::create(c, n * 4));
+  FF_TRY(a->s_vel_, DeviceBuffer::create(c, m * 16));
+  FF_TRY(a->t_moving_, DeviceBuffer::create(c, samples.targets() * 4));
+  {
+    const std::vector<float> zero(4 * m, 0.0f);
+    FF_CHECK(a->s_vel_.upload(zero.data(), zero.size() * 4));
+    std::vector<std::uint32_t> moving(samples.targets());
+    for (std::size_t t = 0; t < moving.size(); ++t) moving[t] = samples.moving(static_cast<std::uint8_t>(t)) ? 1u : 0u;
+    FF_CHECK(a->t_moving_.upload(moving.data(), moving.size() * 4));
+  }
   const std::vector<float> pos = packed(samples.position), nrm = packed(samples.normal);
   const std::vector<std::uint32_t> target(samples.target.begin(), samples.target.end());
   FF_CHECK(a->s_pos_.upload(pos.data(), pos.size() * 4));
@@ -109,16 +118,17 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
                                      {&fx, &fcell, &a->f_target_, &a->s_pos_, &sg.start, &sg.items, &a->s_target_,
                                       &a->s_bond_r2_, &a->nearest_}));
   FF_TRY(a->accel_k_, Kernel::create(c, "ctl_accel", shaders::ctl_accel(),
-                                     {&a->nearest_, &a->s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer()}));
+                                     {&a->nearest_, &a->s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer(),
+                                      &a->f_target_, &a->s_vel_, &a->t_moving_}));
   FF_TRY(a->spring_k_, Kernel::create(c, "ctl_spring", shaders::ctl_spring(),
                                       {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                       &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos}));
+                                       &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos, &a->s_vel_}));
   FF_TRY(a->lambda_k_, Kernel::create(c, "ctl_lambda", shaders::ctl_lambda(),
                                       {&a->s_pos_, &sg.cell, &a->s_rho_c_, &a->s_target_, &a->s_phi_, &fx, &fpos, &fstart,
-                                       &fitems, &a->f_target_, &a->s_coef_}));
+                                       &fitems, &a->f_target_, &a->s_coef_, &a->s_vel_}));
   FF_TRY(a->correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
                                        {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                        &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos}));
+                                        &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos, &a->s_vel_}));
   if (params.gather) FF_CHECK(a->make_seed_field(samples.targets()));
   return a;
 }
@@ -147,7 +157,7 @@ Status AdaptiveDevice::make_seed_field(std::size_t targets) {
   FF_TRY(flood_ba_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_b_, &seed_a_}));
   FF_TRY(gather_k_, Kernel::create(c, "ctl_gather", shaders::ctl_gather(),
                                    {&fluid_->x_buffer(), &f_target_, &nearest_, &s_pos_, &seed_a_, &fluid_->velocity_buffer(),
-                                    &fluid_->acceleration_buffer()}));
+                                    &fluid_->acceleration_buffer(), &s_vel_}));
   return {};
 }
 
@@ -209,12 +219,48 @@ AdaptiveDevice::Constants AdaptiveDevice::constants(float dt) const {
   return k;
 }
 
+// The accelerations pass's own reading of c0.x: the follow share (shaders/ctl_accel.comp).
+AdaptiveDevice::Constants AdaptiveDevice::accel_constants(float dt) const {
+  Constants k = constants(dt);
+  const bool follow = samples_.moving() && params_.follow > 0.0f;
+  k.c0[0] = follow ? std::min(1.0f, params_.follow * dt / control::kReferenceDt) : 0.0f;
+  return k;
+}
+
+// The frame's poses of moving targets, every sub-step's, into pose_pos_ and pose_vel_ (record_begin copies one in).
+Status AdaptiveDevice::prepare_frame(double time, float dt, int substeps) {
+  if (!moving_ || substeps <= 0) return {};
+  const auto steps = static_cast<std::size_t>(substeps);
+  Context& c = fluid_->context();
+  if (steps > pose_steps_) {
+    FF_TRY(pose_pos_, DeviceBuffer::create(c, steps * m_ * 16));
+    FF_TRY(pose_vel_, DeviceBuffer::create(c, steps * m_ * 16));
+    FF_TRY(pose_nrm_, DeviceBuffer::create(c, steps * m_ * 16));
+    pose_steps_ = steps;
+  }
+  std::vector<float> pos(4 * m_ * steps, 0.0f), vel(4 * m_ * steps, 0.0f), nrm(4 * m_ * steps, 0.0f);
+  for (std::size_t s = 0; s < steps; ++s) {
+    // As the CPU controller's begin_step: the samples at the sub-step's start time, u_c over the sub-step.
+    if (samples_.update(time + double(s) * double(dt), dt))
+      return numerical_error("adaptive (GPU): a target's samples were swapped (morph), which the GPU path does not do");
+    for (std::size_t i = 0; i < m_; ++i) {
+      std::memcpy(&pos[4 * (s * m_ + i)], samples_.position[i].data(), 12);
+      std::memcpy(&vel[4 * (s * m_ + i)], samples_.velocity[i].data(), 12);
+      std::memcpy(&nrm[4 * (s * m_ + i)], samples_.normal[i].data(), 12);  // the boundary normals turn too
+    }
+  }
+  FF_CHECK(pose_pos_.upload(pos.data(), pos.size() * 4));
+  FF_CHECK(pose_vel_.upload(vel.data(), vel.size() * 4));
+  return pose_nrm_.upload(nrm.data(), nrm.size() * 4);
+}
+
 // The gather passes' own reading of c0, c1 and c3.y (shaders/control.glsl).
 AdaptiveDevice::Constants AdaptiveDevice::gather_constants(float dt, int jump) const {
   Constants k = constants(dt);
   for (int a = 0; a < 3; ++a) k.c0[a] = ctx_.gravity[a];
   k.c0[3] = params_.gather_speed * ctx_.spacing();
   k.c1[0] = 1.0f / params_.gather_time, k.c1[1] = params_.gather_fill;
+  k.c1[2] = params_.gather_chase, k.c1[3] = samples_.moving() && params_.follow > 0.0f ? 1.0f : 0.0f;
   k.c3[1] = jump;
   return k;
 }
@@ -238,7 +284,17 @@ void AdaptiveDevice::record_seed_field(VkCommandBuffer cb, float dt) const {
   }
 }
 
-void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt) const {
+void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt, int substep) const {
+  if (moving_ && static_cast<std::size_t>(substep) < pose_steps_) {
+    // This sub-step's pose into the samples' buffers, then the samples into their grids again.
+    const VkBufferCopy slice{static_cast<VkDeviceSize>(substep) * m_ * 16, 0, m_ * 16};
+    vkCmdCopyBuffer(cb, pose_pos_.handle(), s_pos_.handle(), 1, &slice);
+    vkCmdCopyBuffer(cb, pose_vel_.handle(), s_vel_.handle(), 1, &slice);
+    vkCmdCopyBuffer(cb, pose_nrm_.handle(), s_normal_.handle(), 1, &slice);
+    compute_barrier(cb);
+    fluid_->record_point_grid(cb, s_grid_);
+    if (params_.gather) fluid_->record_point_grid(cb, s_field_);
+  }
   const Constants k = constants(dt);
   fill_k_.dispatch(cb, &k, groups(m_, 128));
   compute_barrier(cb);
@@ -248,7 +304,7 @@ void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt) const {
 }
 
 void AdaptiveDevice::record_accelerations(VkCommandBuffer cb, float dt) const {
-  const Constants k = constants(dt);
+  const Constants k = accel_constants(dt);
   accel_k_.dispatch(cb, &k, groups(fluid_->size(), 256));
   compute_barrier(cb);
   if (params_.gather) {

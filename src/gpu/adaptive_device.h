@@ -14,8 +14,12 @@
 //                  (an under-filled sample) by jump flooding (ctl_seed_init, ctl_seed_flood); with the
 //                  accelerations, unbonded fluid is steered toward its cell's seed (ctl_gather)
 //
-// So far (the rest is issue 45's): static targets that act from the start at full strength, without kinematic
-// corrections. create() says which of these a scene asks for.
+// Moving targets (keyframed, steered or skinned) are posed on the host by the same control::ControlSamples the CPU
+// controller uses, every sub-step of a frame at once before the frame is recorded (prepare_frame); each sub-step
+// copies its pose into the samples' buffers and sorts them into their grids again on the device.
+//
+// So far (the rest is issue 45's): targets that act from the start at full strength and do not morph, without
+// kinematic corrections. create() says which of these a scene asks for.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/control_samples.h"
@@ -51,7 +55,8 @@ class AdaptiveDevice final : public DeviceController {
   Status get_seeds(std::vector<Index>& seeds) const;
   const GridSpec& field() const { return field_; }
 
-  void record_begin(VkCommandBuffer cb, float dt) const override;
+  Status prepare_frame(double time, float dt, int substeps) override;
+  void record_begin(VkCommandBuffer cb, float dt, int substep) const override;
   void record_accelerations(VkCommandBuffer cb, float dt) const override;
   void record_correction(VkCommandBuffer cb, int iteration, float dt) const override;
 
@@ -60,8 +65,14 @@ class AdaptiveDevice final : public DeviceController {
  private:
   AdaptiveDevice() = default;
   Constants constants(float dt) const;
+  Constants accel_constants(float dt) const;
 
   PbfDevice* fluid_ = nullptr;
+  control::ControlSamples samples_;  // posed on the host, as the CPU controller poses its own
+  bool moving_ = false;              // some target moves: poses are uploaded every frame
+  DeviceBuffer s_vel_, t_moving_;    // u_c per sample (0 when static); per target 1 when it moves
+  DeviceBuffer pose_pos_, pose_vel_, pose_nrm_;  // the frame's sub-steps' poses, one after the other
+  std::size_t pose_steps_ = 0;       // sub-steps pose_pos_ has room for
   control::AdaptiveParams params_;
   control::ControlContext ctx_;
   std::size_t m_ = 0;

@@ -302,7 +302,7 @@ Status PbfDevice::get_state(std::vector<Vec3f>& x, std::vector<Vec3f>& v) const 
 
 template <class Stamp>
 void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
-                               const sim::PbfForceConsts& fk, const Sweeps& sweeps, Stamp&& stamp) const {
+                               const sim::PbfForceConsts& fk, const Sweeps& sweeps, int substep, Stamp&& stamp) const {
   reset_sweeps(cb, false);
   stamp(cb);
   // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
@@ -312,7 +312,7 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   record_grid(cb, &c);
   stamp(cb);
   const float dt = cs.k2[3];
-  if (controller_) controller_->record_begin(cb, dt);
+  if (controller_) controller_->record_begin(cb, dt, substep);
   lambda_k_.dispatch(cb, &c, groups(n_, 128));  // ρ(x) for XSPH (its λ is not used)
   compute_barrier(cb);
   force_k_.dispatch(cb, &cf, groups(n_, 128));
@@ -333,6 +333,7 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   const int iterations = std::max(sweeps.iterations, sweeps.max_iterations);
   if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
   lk_ = lk;
+  if (controller_) FF_CHECK(controller_->prepare_frame(0.0, fk.dt, 1));  // a lone sub-step: from time 0
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
   Constants c = make_constants(grid_, n_, &lk, &dk);
@@ -347,7 +348,7 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
     vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
-    record_substep(cb, c, cf, cs, fk, sweeps, stamp);
+    record_substep(cb, c, cf, cs, fk, sweeps, 0, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
 }
@@ -358,29 +359,34 @@ Result<PbfDevice::PointGrid> PbfDevice::sort_into_grid(const DeviceBuffer& point
   const GridSpec& spec = other ? *other : grid_;
   Context& ctx = *ctx_;
   PointGrid g;
+  g.points = count;
+  g.spec = spec;
   FF_TRY(g.cell, DeviceBuffer::create(ctx, count * 4));
   FF_TRY(g.count, DeviceBuffer::create(ctx, spec.cells() * 4));
   FF_TRY(g.start, DeviceBuffer::create(ctx, (spec.cells() + 1) * 4));
   FF_TRY(g.items, DeviceBuffer::create(ctx, count * 4));
-  FF_TRY(Kernel count_k, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&points, &g.cell, &g.count}));
-  FF_TRY(Kernel scan_k, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&g.count, &g.start}));
-  FF_TRY(Kernel scatter_k, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(), {&g.cell, &g.start, &g.count, &g.items}));
-  FF_TRY(Kernel order_k, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&g.start, &g.items}));
-  const Constants c = make_constants(spec, count, nullptr, nullptr);
-  FF_CHECK(ctx.submit_and_wait([&](VkCommandBuffer cb) {
-    vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
-    compute_barrier(cb);
-    count_k.dispatch(cb, &c, groups(count, 256));
-    compute_barrier(cb);
-    scan_k.dispatch(cb, &c, 1);
-    compute_barrier(cb);
-    vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
-    compute_barrier(cb);
-    scatter_k.dispatch(cb, &c, groups(count, 256));
-    compute_barrier(cb);
-    order_k.dispatch(cb, &c, groups(spec.cells(), 256));
-  }));
+  FF_TRY(g.count_k, Kernel::create(ctx, "grid_count", shaders::grid_count(), {&points, &g.cell, &g.count}));
+  FF_TRY(g.scan_k, Kernel::create(ctx, "grid_scan", shaders::grid_scan(), {&g.count, &g.start}));
+  FF_TRY(g.scatter_k, Kernel::create(ctx, "grid_scatter", shaders::grid_scatter(), {&g.cell, &g.start, &g.count, &g.items}));
+  FF_TRY(g.order_k, Kernel::create(ctx, "grid_order", shaders::grid_order(), {&g.start, &g.items}));
+  FF_CHECK(ctx.submit_and_wait([&](VkCommandBuffer cb) { record_point_grid(cb, g); }));
   return g;
+}
+
+void PbfDevice::record_point_grid(VkCommandBuffer cb, const PointGrid& g) const {
+  const Constants c = make_constants(g.spec, g.points, nullptr, nullptr);
+  vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
+  compute_barrier(cb);
+  g.count_k.dispatch(cb, &c, groups(g.points, 256));
+  compute_barrier(cb);
+  g.scan_k.dispatch(cb, &c, 1);
+  compute_barrier(cb);
+  vkCmdFillBuffer(cb, g.count.handle(), 0, VK_WHOLE_SIZE, 0);
+  compute_barrier(cb);
+  g.scatter_k.dispatch(cb, &c, groups(g.points, 256));
+  compute_barrier(cb);
+  g.order_k.dispatch(cb, &c, groups(g.spec.cells(), 256));
+  compute_barrier(cb);
 }
 
 Status PbfDevice::make_surface_kernels() {
@@ -512,6 +518,7 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time
   sim::PbfForceConsts fk = solver.force_consts(plan.dt);
   if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, plan.dt)));
   lk_ = lk;
+  if (controller_) FF_CHECK(controller_->prepare_frame(time, plan.dt, plan.steps));
   const sim::SolverParams& sp = solver.params();
   const Sweeps sweeps{sp.iterations, sp.max_iterations, sp.max_density_error};
   Constants c = make_constants(grid_, n_, &lk, &dk);
@@ -523,7 +530,7 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time
     compute_barrier(cb);
     for (int s = 0; s < plan.steps; ++s) {
       fk.st_key = sim::surface_tension_step_key(time + s * double(plan.dt));  // the CPU's key for this sub-step
-      record_substep(cb, c, cf, cs, fk, sweeps, [](VkCommandBuffer) {});
+      record_substep(cb, c, cf, cs, fk, sweeps, s, [](VkCommandBuffer) {});
     }
   }));
   FF_TRY(const Check after, check());

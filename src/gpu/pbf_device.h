@@ -61,8 +61,11 @@ struct DeviceFrame {
 class DeviceController {
  public:
   virtual ~DeviceController() = default;
-  /// After the grid on x (begin_step).
-  virtual void record_begin(VkCommandBuffer cb, float dt) const = 0;
+  /// Before a frame of `substeps` sub-steps of `dt` from `time` is recorded: what its sub-steps need from the host
+  /// (the poses of moving targets), uploaded at once so that the frame stays one submission.
+  virtual Status prepare_frame(double time, float dt, int substeps) = 0;
+  /// After the grid on x (begin_step) of sub-step `substep` of the frame.
+  virtual void record_begin(VkCommandBuffer cb, float dt, int substep) const = 0;
   /// After the forces, before the prediction: the accelerations buffer may be changed (add_accelerations).
   virtual void record_accelerations(VkCommandBuffer cb, float dt) const = 0;
   /// Before sweep `iteration` of the density constraint, on x* (correct_positions).
@@ -129,13 +132,19 @@ class PbfDevice {
   Status lambda_only(const sim::PbfLambdaConsts& lk);
 
   /// Points (vec4 each, `count` of them) sorted into this device's grid as the fluid is (or into `other`): each
-  /// point's cell, the cells' runs (start: cells + 1) and the points by cell, then index. For samples that do not move.
+  /// point's cell, the cells' runs (start: cells + 1) and the points by cell, then index. sort_into_grid() sorts them
+  /// once (samples that do not move); record_point_grid() records the sort into a command buffer again (samples
+  /// that move, each sub-step).
   struct PointGrid {
     DeviceBuffer cell, count, start, items;
+    Kernel count_k, scan_k, scatter_k, order_k;
+    std::size_t points = 0;
+    GridSpec spec;
   };
   Result<PointGrid> sort_into_grid(const DeviceBuffer& points, std::size_t count, const GridSpec* other = nullptr) const;
+  void record_point_grid(VkCommandBuffer cb, const PointGrid& g) const;
   /// The controller whose passes every later sub-step records (null: none); it must outlive its use here.
-  void set_controller(const DeviceController* controller) { controller_ = controller; }
+  void set_controller(DeviceController* controller) { controller_ = controller; }
   // What a DeviceController binds: the state, the accelerations, and the grid on x of the current sub-step.
   const DeviceBuffer& x_buffer() const { return x_; }
   const DeviceBuffer& predicted_buffer() const { return pos_; }
@@ -159,7 +168,7 @@ class PbfDevice {
   // One sub-step: c the sweeps' constants, cf the force pass's, cs the prediction's and update's.
   template <class Stamp>
   void record_substep(VkCommandBuffer cb, const Constants& c, const Constants& cf, const Constants& cs,
-                      const sim::PbfForceConsts& fk, const Sweeps& sweeps, Stamp&& stamp) const;
+                      const sim::PbfForceConsts& fk, const Sweeps& sweeps, int substep, Stamp&& stamp) const;
   void record_surface_tension(VkCommandBuffer cb, const sim::PbfForceConsts& fk, const sim::PbfLambdaConsts& lk) const;
   sim::PbfLambdaConsts lk_;  // of the sub-step being recorded (h and m for the surface tension)
   // The sweeps of a sub-step, each followed by x* ← next and the density error; `stamp` after each pass (timestamps
@@ -183,7 +192,7 @@ class PbfDevice {
   Status make_surface_kernels();
   Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, predict_k_, update_k_, check_k_;
   Kernel copy_k_, error_k_, decide_k_;
-  const DeviceController* controller_ = nullptr;
+  DeviceController* controller_ = nullptr;
   VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 4 + 3·kMaxTimedIterations queries
   static constexpr VkDeviceSize kStateBytes = 24;  // done, sweeps, mean, max bits, total, last max
   static constexpr int kMaxTimedIterations = 64;

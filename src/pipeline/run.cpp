@@ -500,7 +500,7 @@ Result<Device> run_device(const scene::Scene& scene, bool has_targets, const std
   FF_TRY(const Device device, parse_device(name));
   control::ControllerSpec spec = scene.controller;
   if (!has_targets) spec.name = "none";
-  FF_CHECK(check_device(device, scene.solver, spec));
+  FF_CHECK(check_device(device, scene.solver, spec, scene.targets));
   return device;
 }
 

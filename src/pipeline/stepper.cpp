@@ -109,10 +109,16 @@ Result<int> pick_gpu(bool any) {
 
 }  // namespace
 
-Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec) {
+Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec,
+                    std::span<const scene::TargetSpec> targets) {
   if (device != Device::Gpu) return {};
-  if (const std::string gap = gpu_gap(solver, spec); !gap.empty())
-    return param_error("--device gpu: the GPU path does not do " + gap + " yet; use --device cpu");
+  std::string gap = gpu_gap(solver, spec);
+  for (std::size_t t = 0; t < targets.size() && gap.empty() && spec.name == "adaptive"; ++t) {
+    if (!targets[t].swaps.empty()) gap = fmt::format("a morphing target (targets[{}].morph)", t);
+    else if (!targets[t].strength.empty()) gap = fmt::format("a strength track (targets[{}].strength)", t);
+    else if (targets[t].start > 0.0f) gap = fmt::format("a target that starts later (targets[{}].start)", t);
+  }
+  if (!gap.empty()) return param_error("--device gpu: the GPU path does not do " + gap + " yet; use --device cpu");
   return {};
 }
 

@@ -6,11 +6,13 @@
 #include "control/control_targets.h"
 #include "control/registry.h"
 #include "core/error.h"
+#include "scene/scene.h"
 #include "sim/controller.h"
 #include "sim/particle_set.h"
 #include "sim/pbf_solver.h"
 
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,8 +24,9 @@ enum class Device { Cpu, Gpu, Auto };
 Result<Device> parse_device(std::string_view name, std::string_view option = "--device");
 
 /// For --device gpu: an Error naming what of the scene the GPU path does not do yet (checked before the run starts
-/// anything); ok for the CPU and auto.
-Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec);
+/// anything); ok for the CPU and auto. `targets`: the scene's (their morphs, strength tracks and start times).
+Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec,
+                    std::span<const scene::TargetSpec> targets = {});
 
 class FrameStepper {
  public:

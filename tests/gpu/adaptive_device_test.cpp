@@ -182,6 +182,77 @@ TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
   for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
+// A keyframed target (the sphere gliding sideways and turning) with the gather steering: its samples posed on the
+// host every sub-step as the CPU controller poses them, the fluid carried along (follow) and chased (gather_chase).
+// One frame from a state formed on the CPU tracks the CPU controller.
+TEST(GpuAdaptive, AMovingTargetTracksTheCpuController) {
+  Scene s;
+  s.params.gather = true;
+  pose::TargetMotion motion;
+  motion.keys.resize(2);
+  motion.keys[1].time = 2.0;
+  motion.keys[1].translate = Vec3f(0.4f, 0.0f, 0.0f);
+  motion.keys[1].rotate_deg = Vec3f(0.0f, 60.0f, 0.0f);
+  motion.pivot = Vec3f(0.0f, 0.45f, 0.0f);
+  auto targets = [&] {
+    auto t = s.targets();
+    t[0].motion = motion;
+    return t;
+  };
+  sim::ParticleSet p;
+  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
+  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
+  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  auto cpu_ctl = control::AdaptiveController::create(targets(), s.ctx, s.params);
+  ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
+  for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
+  const sim::ParticleSet start = p;
+  ASSERT_TRUE(solver.advance(p, 40 / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
+
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  auto dev = PbfDevice::create(**ctx, start.size(),
+                               GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
+  ASSERT_TRUE((*dev)->set_ids(start.id).ok());
+  auto ctl = AdaptiveDevice::create(**dev, targets(), s.ctx, s.params);
+  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+  (*dev)->set_controller(ctl->get());
+  auto frame = (*dev)->advance(solver, 40 / 60.0, 1.0 / 60.0);
+  ASSERT_TRUE(frame.has_value()) << frame.error().message;
+  std::vector<Vec3f> x, v;
+  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  const auto gx = by_id(start, x), cx = by_id(p, p.position), sx = by_id(start, start.position);
+  std::vector<double> dx(gx.size()), moved(gx.size());
+  for (std::size_t i = 0; i < gx.size(); ++i) {
+    dx[i] = (gx[i] - cx[i]).norm() / s.c.sp.spacing();
+    moved[i] = (cx[i] - sx[i]).norm() / s.c.sp.spacing();
+  }
+  std::sort(dx.begin(), dx.end());
+  std::sort(moved.begin(), moved.end());
+  std::vector<Index> bound;
+  ASSERT_TRUE((*ctl)->get_bound(bound).ok());
+  std::size_t same = 0, held = 0;
+  for (std::size_t i = 0; i < bound.size(); ++i) {
+    same += bound[i] == p.bound_control[std::find(p.id.begin(), p.id.end(), start.id[i]) - p.id.begin()];
+    held += bound[i] != kInvalidIndex;
+  }
+  std::printf("moving target, %zu particles (%zu held), %d sub-steps: the frame moved them |Δx|/d median %.3f; GPU − CPU "
+              "median %.2e, 90th %.2e, largest %.2e; same nearest sample %zu\n",
+              gx.size(), held, frame->substeps, moved[moved.size() / 2], dx[dx.size() / 2], dx[dx.size() * 9 / 10],
+              dx.back(), same);
+  EXPECT_GT(held, gx.size() / 2);
+  EXPECT_GT(moved[moved.size() / 2], 0.05);  // the target carried its fluid along
+  EXPECT_LT(dx[dx.size() / 2], 1e-3);
+  EXPECT_LT(dx[dx.size() * 9 / 10], 1e-2);
+  EXPECT_GE(same, gx.size() - gx.size() / 50);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
 TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   Scene s;
   auto ctx = Context::create({.device = -1, .validation = false});
@@ -195,12 +266,11 @@ TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   auto a = AdaptiveDevice::create(**dev, s.targets(), s.ctx, kinematic);
   ASSERT_FALSE(a.has_value());
   EXPECT_NE(a.error().message.find("kinematic"), std::string::npos) << a.error().message;
-  auto moving = s.targets();
-  moving[0].motion.keys.resize(2);
-  moving[0].motion.keys[1].time = 1.0;
-  auto b = AdaptiveDevice::create(**dev, moving, s.ctx, s.params);
+  auto morph = s.targets();
+  morph[0].swaps.emplace_back(1.0, s.c.set);
+  auto b = AdaptiveDevice::create(**dev, morph, s.ctx, s.params);
   ASSERT_FALSE(b.has_value());
-  EXPECT_NE(b.error().message.find("moving target"), std::string::npos) << b.error().message;
+  EXPECT_NE(b.error().message.find("morphing target"), std::string::npos) << b.error().message;
 }
 
 }  // namespace

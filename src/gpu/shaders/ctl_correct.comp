@@ -16,6 +16,7 @@ layout(std430, binding = 7) readonly buffer STarget { uint s_target[]; };
 layout(std430, binding = 8) readonly buffer SBond { float s_bond_r2[]; };
 layout(std430, binding = 9) readonly buffer SCoef { float s_coef[]; };
 layout(std430, binding = 10) buffer Pos { vec4 pos[]; };
+layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -34,7 +35,7 @@ void main() {
       const vec3 xc = s_pos[i].xyz;
       const vec3 b = xc - x0;
       if (dot(b, b) > s_bond_r2[i] || dot(b, b) >= hc2) continue;  // bonded at the start of the sub-step
-      const vec3 r = xc - xs;
+      const vec3 r = xc + C.c2.w * s_vel[i].xyz - xs;  // the sample at the end of the sub-step, as x*
       const float r2 = dot(r, r);
       if (r2 >= hc2 || r2 <= 0.0) continue;
       const float len = sqrt(r2);

@@ -2,7 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // The gather steering (ours, METHOD §a.10; control/adaptive.cpp, gather; static targets): an unbonded particle whose
 // target has under-filled samples is steered toward the nearest of them (the seed field at its cell) at a limited
-// speed, with gravity cancelled: a += −g + (v_des − v)/τ, v_des = speed · (x_s − x)/|x_s − x|.
+// speed, with gravity cancelled: a += −g + (v_des − v)/τ, v_des = speed · (x_s − x)/|x_s − x|. On a moving target
+// the seed's pose velocity u is added and the approach is at least gather_chase |u| (c1.z; c1.w = 1 when a target
+// moves).
 layout(local_size_x = 256) in;
 #include "control.glsl"
 layout(std430, binding = 0) readonly buffer FX { vec4 f_x[]; };
@@ -12,6 +14,7 @@ layout(std430, binding = 3) readonly buffer SPos { vec4 s_pos[]; };
 layout(std430, binding = 4) readonly buffer Seed { uint seed[]; };
 layout(std430, binding = 5) readonly buffer Vel { vec4 vel[]; };
 layout(std430, binding = 6) buffer Accel { vec4 accel[]; };
+layout(std430, binding = 7) readonly buffer SVel { vec4 s_vel[]; };
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -24,6 +27,12 @@ void main() {
   const vec3 to = s_pos[s].xyz - xj;
   const float len = length(to);
   if (len <= 0.0) return;
-  const vec3 v_des = (C.c0.w / len) * to;
+  vec3 v_des;
+  if (C.c1.w != 0.0) {  // chase: closing in at least at a share of the seed's own speed, on top of following it
+    const vec3 u = s_vel[s].xyz;
+    v_des = (max(C.c0.w, C.c1.z * length(u)) / len) * to + u;
+  } else {
+    v_des = (C.c0.w / len) * to;
+  }
   accel[j] += vec4(-C.c0.xyz + C.c1.x * (v_des - vel[j].xyz), 0.0);
 }

@@ -17,6 +17,7 @@ layout(std430, binding = 7) readonly buffer FStart { uint f_start[]; };
 layout(std430, binding = 8) readonly buffer FItems { uint f_items[]; };
 layout(std430, binding = 9) readonly buffer FTarget { uint f_target[]; };
 layout(std430, binding = 10) writeonly buffer SCoef { float s_coef[]; };
+layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
@@ -25,6 +26,7 @@ void main() {
   const float mp = C.c1.x, eps = C.c1.y;
   const uint t = s_target[i];
   const vec3 xc = s_pos[i].xyz;
+  const vec3 xe = xc + C.c2.w * s_vel[i].xyz;  // the sample at the end of the sub-step, as x*
   const ivec3 ci = cell_of_index(s_cell[i]);
   float sw = 0.0, g2 = 0.0;
   FOR_CELLS_AROUND(ci, C.c3.y, c)
@@ -33,7 +35,7 @@ void main() {
       if (C.c3.w != 0 && f_target[j] != t) continue;
       const vec3 b = xc - f_x[j].xyz;
       if (dot(b, b) >= hc2) continue;  // the pair was not within H_c at the start (the CPU's pair list)
-      const vec3 r = xc - pos[j].xyz;
+      const vec3 r = xe - pos[j].xyz;
       const float r2 = dot(r, r);
       if (r2 >= hc2) continue;
       const float q2 = hc2 - r2;
