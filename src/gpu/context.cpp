@@ -224,6 +224,7 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
   VkPhysicalDeviceProperties props{};
   vkGetPhysicalDeviceProperties(c->physical_, &props);
   c->timestamp_period_ = props.limits.timestampPeriod;
+  c->max_groups_ = props.limits.maxComputeWorkGroupCount[0];
   std::uint32_t nf = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(c->physical_, &nf, nullptr);
   std::vector<VkQueueFamilyProperties> families(nf);

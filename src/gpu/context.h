@@ -46,6 +46,8 @@ class Context {
   VkQueue queue() const { return queue_; }
   VkCommandPool command_pool() const { return pool_; }
   float timestamp_period_ns() const { return timestamp_period_; }
+  /// The most workgroups one dispatch may have along x (maxComputeWorkGroupCount[0]; 65535 on some devices).
+  std::uint32_t max_groups() const { return max_groups_; }
   /// Valid bits of the compute queue's timestamps (0: it has none).
   std::uint32_t timestamp_valid_bits() const { return timestamp_bits_; }
   /// A memory type among `type_bits` with all of `wanted`; −1 if none.
@@ -75,6 +77,7 @@ class Context {
   VkPhysicalDeviceMemoryProperties memory_{};
   float timestamp_period_ = 0;
   std::uint32_t timestamp_bits_ = 0;
+  std::uint32_t max_groups_ = 65535;
   std::vector<std::string> messages_;
 };
 

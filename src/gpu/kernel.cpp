@@ -86,8 +86,10 @@ Status DeviceBuffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize o
   FF_TRY(DeviceBuffer staging, create(*ctx_, bytes, true));
   std::memcpy(staging.mapped(), data, bytes);
   return ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    compute_barrier(cb);  // after the device's earlier writes and reads of the buffer
     const VkBufferCopy region{0, offset, bytes};
     vkCmdCopyBuffer(cb, staging.handle(), buffer_, 1, &region);
+    compute_barrier(cb);  // before the passes of later submissions read it
   });
 }
 
@@ -95,8 +97,10 @@ Status DeviceBuffer::download(void* data, VkDeviceSize bytes, VkDeviceSize offse
   if (bytes == 0) return {};
   FF_TRY(DeviceBuffer staging, create(*ctx_, bytes, true));
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+    compute_barrier(cb);  // the passes' writes, before the copy reads them
     const VkBufferCopy region{offset, 0, bytes};
     vkCmdCopyBuffer(cb, buffer_, staging.handle(), 1, &region);
+    host_barrier(cb);  // the copy's writes, visible to the host once the fence has signalled
   }));
   std::memcpy(data, staging.mapped(), bytes);
   return {};
@@ -209,6 +213,13 @@ void Kernel::dispatch(VkCommandBuffer cb, const void* constants, std::uint32_t g
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
   vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushConstantBytes, constants);
   if (groups > 0) vkCmdDispatch(cb, groups, 1, 1);
+}
+
+void host_barrier(VkCommandBuffer cb) {
+  VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0, nullptr);
 }
 
 void compute_barrier(VkCommandBuffer cb) {

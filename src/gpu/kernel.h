@@ -71,5 +71,7 @@ class Kernel {
 
 /// A barrier between two dispatches (and buffer fills or copies): the writes of the first are visible to the second.
 void compute_barrier(VkCommandBuffer cb);
+/// A barrier after a copy into a host-visible buffer: its writes are visible to the host after the fence.
+void host_barrier(VkCommandBuffer cb);
 
 }  // namespace ff::gpu

@@ -88,6 +88,11 @@ Result<GridSpec> GridSpec::covering(const Vec3f& lo, const Vec3f& hi, float cell
 Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n, const GridSpec& grid) {
   if (n == 0) return param_error("GPU PBF: no particles");
   if (n > static_cast<std::size_t>(INT32_MAX)) return param_error("GPU PBF: more than 2^31 particles");
+  // Every pass dispatches along x only: its groups (64 particles or 256 cells the smallest) must fit the device's limit.
+  const double most = static_cast<double>(ctx.max_groups());
+  if (static_cast<double>(n) > 64.0 * most || static_cast<double>(grid.cells()) > 256.0 * most)
+    return param_error(fmt::format("GPU PBF: {} particles or {} grid cells are more than {} allows in one dispatch ({} "
+                                   "workgroups)", n, grid.cells(), ctx.info().name, ctx.max_groups()));
   std::unique_ptr<PbfDevice> d(new PbfDevice());
   d->ctx_ = &ctx;
   d->n_ = n;
@@ -401,7 +406,9 @@ Status PbfDevice::make_surface_kernels() {
 Status PbfDevice::set_ids(std::span<const Index> id) {
   if (id.size() != n_) return param_error(fmt::format("GPU PBF: {} ids for {} particles", id.size(), n_));
   const std::vector<std::uint32_t> ids(id.begin(), id.end());
-  return id_.upload(ids.data(), n_ * 4);
+  FF_CHECK(id_.upload(ids.data(), n_ * 4));
+  ids_.assign(id.begin(), id.end());
+  return {};
 }
 
 // The spherical Fibonacci set of `n` points (sim/surface_tension.cpp, prepare_points, in double as there), on the
@@ -410,9 +417,16 @@ Status PbfDevice::prepare_points(int n) {
   if (n == points_n_) return {};
   const auto count = static_cast<std::size_t>(n);
   if (count > points_cap_) {
+    // The larger buffer, then the kernels bound to it; the size is raised only once both exist.
+    FF_TRY(DeviceBuffer bigger, DeviceBuffer::create(*ctx_, 16 * count));
+    std::swap(points_, bigger);
+    if (const Status s = make_surface_kernels(); !s.ok()) {
+      std::swap(points_, bigger);
+      FF_CHECK(make_surface_kernels());  // the old buffer's kernels again
+      return s;
+    }
     points_cap_ = count;
-    FF_TRY(points_, DeviceBuffer::create(*ctx_, 16 * points_cap_));
-    FF_CHECK(make_surface_kernels());
+    points_n_ = 0;
   }
   std::vector<float> p(4 * count, 0.0f);
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
@@ -506,9 +520,9 @@ Result<PbfDevice::Check> PbfDevice::check() {
 }
 
 Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time, double frame_dt) {
-  const auto blown = [](std::size_t i, int step) {
+  const auto blown = [&](std::size_t i, int step) {
     return numerical_error(fmt::format("simulation blew up in sub-step {} on the GPU: particle {} has a non-finite "
-                                       "position or velocity", step, i));
+                                       "position or velocity", step, i < ids_.size() ? ids_[i] : Index(i)));
   };
   FF_TRY(const Check before, check());
   if (before.first_bad < n_) return blown(before.first_bad, 0);
@@ -543,8 +557,8 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time
   } state;
   static_assert(sizeof state == kStateBytes);
   FF_CHECK(state_.download(&state, sizeof state));
-  return DeviceFrame{plan.steps, plan.dt, plan.capped, before.max_speed, static_cast<long>(state.total), state.mean,
-                     state.last_max};
+  return DeviceFrame{plan.steps, plan.dt, plan.capped, before.max_speed, after.max_speed, static_cast<long>(state.total),
+                     state.mean, state.last_max};
 }
 
 Status PbfDevice::lambda_only(const sim::PbfLambdaConsts& lk) {

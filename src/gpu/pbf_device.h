@@ -47,12 +47,13 @@ struct PassTimes {
   double total() const { return grid + force + lambda + delta + copy + update; }
 };
 
-/// What one output frame on the device did (sim::FrameStats' counterpart, so far without the density error).
+/// What one output frame on the device did (sim::FrameStats' counterpart).
 struct DeviceFrame {
   int substeps = 0;
   float dt = 0;
   bool capped = false;     ///< CFL wanted more than max_substeps
   double max_speed = 0;    ///< m/s at the start of the frame, from which the sub-steps were planned
+  double end_speed = 0;    ///< m/s at the end of the frame
   long sweeps = 0;         ///< density-constraint sweeps run over the frame's sub-steps
   double density_error_mean = 0, density_error_max = 0;  ///< of the last sweep: mean and largest max(ρ/ρ0 − 1, 0)
 };
@@ -186,6 +187,7 @@ class PbfDevice {
   // Surface tension: the particles' ids (their random rotations), the point set, each particle's class, n̂, κ.
   DeviceBuffer id_, points_, st_class_, st_normal_, st_curv_;
   int points_n_ = 0;         // points in points_ now
+  std::vector<Index> ids_;   // the ids of set_ids(), for error messages (empty: the index is the id)
   std::size_t points_cap_ = 0;
   Kernel st_estimate_k_, st_smooth_k_;
   Status prepare_points(int n);

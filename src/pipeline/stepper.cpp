@@ -49,7 +49,7 @@ class GpuStepper final : public FrameStepper {
     stats.substeps = f.substeps;
     stats.dt = f.dt;
     stats.substeps_capped = f.capped;
-    stats.max_speed = f.max_speed;
+    stats.max_speed = f.end_speed;  // the CPU's FrameStats: at the end of the frame
     stats.times.iterations = f.sweeps;
     stats.density_error_mean = f.density_error_mean;
     stats.density_error_max = f.density_error_max;
@@ -114,7 +114,8 @@ Status check_device(Device device, const sim::SolverParams& solver, const contro
   if (device != Device::Gpu) return {};
   std::string gap = gpu_gap(solver, spec);
   for (std::size_t t = 0; t < targets.size() && gap.empty() && spec.name == "adaptive"; ++t) {
-    if (!targets[t].swaps.empty()) gap = fmt::format("a morphing target (targets[{}].morph)", t);
+    if (spec.get<control::AdaptiveParams>().kinematic) gap = "kinematic corrections (controller.adaptive.kinematic)";
+    else if (!targets[t].swaps.empty()) gap = fmt::format("a morphing target (targets[{}].morph)", t);
     else if (!targets[t].strength.empty()) gap = fmt::format("a strength track (targets[{}].strength)", t);
     else if (targets[t].start > 0.0f) gap = fmt::format("a target that starts later (targets[{}].start)", t);
   }

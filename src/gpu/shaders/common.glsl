@@ -1,6 +1,6 @@
 // What every pass of the PBF sub-step shares: the push constants (one block for all passes, 128 bytes, the least
 // every Vulkan device offers) and the uniform grid's cell of a position. The host fills the block from
-// gpu::PassConstants (gpu/pbf_device.h); the two layouts are checked against each other by a static_assert there.
+// PbfDevice::Constants (gpu/pbf_device.cpp); the two layouts are checked against each other by a static_assert there.
 // A pass with a block of its own (the controller's, control.glsl) defines FF_OWN_CONSTANTS and declares it as C,
 // beginning with the same grid_lo and grid_dims.
 #ifndef FF_OWN_CONSTANTS

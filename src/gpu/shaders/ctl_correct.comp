@@ -31,7 +31,7 @@ void main() {
     for (uint k = s_start[c]; k < s_start[c + 1u]; ++k) {
       const uint i = s_items[k];
       const float coef = s_coef[i];
-      if (!(coef > 0.0) || s_target[i] != t) continue;
+      if (!(coef > 0.0) || (C.c3.w != 0 && s_target[i] != t)) continue;
       const vec3 xc = s_pos[i].xyz;
       const vec3 b = xc - x0;
       if (dot(b, b) > s_bond_r2[i] || dot(b, b) >= hc2) continue;  // bonded at the start of the sub-step

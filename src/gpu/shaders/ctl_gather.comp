@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// The gather steering (ours, METHOD §a.10; control/adaptive.cpp, gather; static targets): an unbonded particle whose
+// The gather steering (ours, METHOD §a.10; control/adaptive.cpp, gather): an unbonded particle whose
 // target has under-filled samples is steered toward the nearest of them (the seed field at its cell) at a limited
 // speed, with gravity cancelled: a += −g + (v_des − v)/τ, v_des = speed · (x_s − x)/|x_s − x|. On a moving target
 // the seed's pose velocity u is added and the approach is at least gather_chase |u| (c1.z; c1.w = 1 when a target

@@ -32,7 +32,7 @@ void main() {
       const uint i = s_items[k];
       const vec3 xc = s_pos[i].xyz;
       const vec3 b = xc - x0;
-      if (s_target[i] != t || dot(b, b) > s_bond_r2[i] || dot(b, b) >= hc2) continue;  // bonded at the start of the sub-step
+      if ((C.c3.w != 0 && s_target[i] != t) || dot(b, b) > s_bond_r2[i] || dot(b, b) >= hc2) continue;  // bonded at the start of the sub-step
       const vec3 r = xc + C.c2.w * s_vel[i].xyz - xs;  // the sample at the end of the sub-step, as x*
       const float r2 = dot(r, r);
       if (r2 >= hc2) continue;
