@@ -113,16 +113,41 @@ void PbfSolver::compute_densities(ParticleSet& p) {
   densities(p.position, p.density);
 }
 
+namespace {
+
+// The drag's parameters at this spacing (the CPU's pass and the GPU's constants, force_consts, both take these).
+DragParams drag_params(const SolverParams& params, float mass) {
+  DragParams dp;
+  dp.scale = params.drag;
+  dp.air_density = params.air_density;
+  dp.liquid_density = params.rest_density;
+  dp.spacing = params.spacing();
+  dp.mass = mass;
+  return dp;
+}
+
+// The surface tension's parameters at this spacing (the CPU's pass and the GPU's constants both take these).
+SurfaceTensionParams surface_tension_params(const SolverParams& params, float mass) {
+  SurfaceTensionParams st;
+  // σ is given at the reference spacing d_ref = 0.05 m (SPlisHSPlasH's default radius, where the paper's
+  // σ = 0.05 comes from) and scaled by (d/d_ref)², so the surface acceleration σκ/m ∝ 1/d keeps its size
+  // relative to gravity at any resolution; the literal σ at d = 0.02 m pulls ~16× harder and jitters. The
+  // surface layer's acceleration still grows as 1/d: the capillary sub-step (advance()) allows for it.
+  const float dr = params.spacing() / SolverParams::kSurfaceTensionRefSpacing;
+  st.sigma = params.surface_tension * dr * dr;
+  st.samples_per_second = params.surface_tension_samples;
+  st.support = params.support();
+  st.mass = mass;
+  return st;
+}
+
+}  // namespace
+
 // a_ext = g + XSPH viscosity in the seed's acceleration form (eq. 12, sign fixed as METHOD.md §a.4):
 //   a_vis,i = (η/Δt) Σ_j (m/ρ_j)(v_j − v_i) W(x_i − x_j, H_p)
 // then surface tension (eq. 13) and drag (eq. 14), each skipped when its coefficient is 0.
 void PbfSolver::external_accelerations(ParticleSet& p, float dt, double time) {
-  DragParams dp;
-  dp.scale = params_.drag;
-  dp.air_density = params_.air_density;
-  dp.liquid_density = params_.rest_density;
-  dp.spacing = params_.spacing();
-  dp.mass = mass_;
+  const DragParams dp = drag_params(params_, mass_);
   const bool drag = params_.drag > 0.0f;
   // The drag's pass over the neighbours (occlusion) rides on the XSPH pass when there is one.
   const bool fused = drag && params_.viscosity > 0.0f;
@@ -132,20 +157,10 @@ void PbfSolver::external_accelerations(ParticleSet& p, float dt, double time) {
   } else {
     xsph_accelerations(p, dt, nullptr);
   }
-  if (params_.surface_tension > 0.0f) {
-    SurfaceTensionParams st;
-    // σ is given at the reference spacing d_ref = 0.05 m (SPlisHSPlasH's default radius, where the paper's
-    // σ = 0.05 comes from) and scaled by (d/d_ref)², so the surface acceleration σκ/m ∝ 1/d keeps its size
-    // relative to gravity at any resolution; the literal σ at d = 0.02 m pulls ~16× harder and jitters. The
-    // surface layer's acceleration still grows as 1/d: the capillary sub-step (advance()) allows for it.
-    const float dr = params_.spacing() / SolverParams::kSurfaceTensionRefSpacing;
-    st.sigma = params_.surface_tension * dr * dr;
-    st.samples_per_second = params_.surface_tension_samples;
-    st.support = params_.support();
-    st.mass = mass_;
-    surface_tension_.add_accelerations(p.position, p.id, neighbors_, surface_candidates_, st, dt,
-                                       surface_tension_step_key(time), p.acceleration);
-  }
+  if (params_.surface_tension > 0.0f)
+    surface_tension_.add_accelerations(p.position, p.id, neighbors_, surface_candidates_,
+                                       surface_tension_params(params_, mass_), dt, surface_tension_step_key(time),
+                                       p.acceleration);
   if (drag && !fused) add_drag(p.position, p.velocity, neighbors_, dp, p.acceleration);
 }
 
@@ -332,17 +347,13 @@ PbfDeltaConsts PbfSolver::delta_consts() const {
 PbfForceConsts PbfSolver::force_consts(float dt) const {
   PbfForceConsts fk;
   fk.gravity = params_.gravity, fk.dt = dt, fk.xsph = params_.viscosity / dt, fk.mass_poly6_k = mass_ * poly6_.k;
-  if (params_.drag > 0.0f) {  // as external_accelerations() builds its DragModel
-    DragParams dp;
-    dp.scale = params_.drag, dp.air_density = params_.air_density, dp.liquid_density = params_.rest_density;
-    dp.spacing = params_.spacing(), dp.mass = mass_;
-    const DragModel::Coefficients c = DragModel(dp).coefficients();
+  if (params_.drag > 0.0f) {
+    const DragModel::Coefficients c = DragModel(drag_params(params_, mass_)).coefficients();
     fk.drag_L = c.L, fk.drag_y = c.y_coeff, fk.drag_re = c.re_coeff, fk.drag_d2 = c.d2, fk.drag_acc = c.acc;
   }
-  if (params_.surface_tension > 0.0f) {  // σ scaled to this spacing as external_accelerations() scales it
-    const float dr = params_.spacing() / SolverParams::kSurfaceTensionRefSpacing;
-    fk.st_sigma = params_.surface_tension * dr * dr;
-    fk.st_samples_per_second = params_.surface_tension_samples;
+  if (params_.surface_tension > 0.0f) {
+    const SurfaceTensionParams st = surface_tension_params(params_, mass_);
+    fk.st_sigma = st.sigma, fk.st_samples_per_second = st.samples_per_second;
   }
   return fk;
 }
