@@ -260,19 +260,51 @@ Status PbfDevice::read_times(int iterations, bool with_force, PassTimes& times) 
   return {};
 }
 
+namespace {
+
+// Timestamps after the passes of a timed submission (the barriers before each order the passes): one query each,
+// in order; nothing when not timed.
+struct Stamps {
+  VkQueryPool pool = VK_NULL_HANDLE;
+  bool on = false;
+  std::uint32_t next = 0;
+  void operator()(VkCommandBuffer cb) {
+    if (on) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool, next++);
+  }
+  void reset(VkCommandBuffer cb, std::uint32_t queries) const {
+    if (on) vkCmdResetQueryPool(cb, pool, 0, queries);
+  }
+};
+
+}  // namespace
+
+// What every way of stepping on the device checks and prepares first: the cells cover the support, the sub-step is
+// positive, the surface tension's points and the controller's poses are on the device; then the sweeps' constants
+// (c), the force pass's (cf) and the prediction's and update's (cs).
+Status PbfDevice::prepare_substeps(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk,
+                                   const sim::PbfForceConsts& fk, const Sweeps& sweeps, double time, int steps,
+                                   Constants& c, Constants& cf, Constants& cs) {
+  if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
+  if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
+  if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
+  lk_ = lk;
+  if (controller_) FF_CHECK(controller_->prepare_frame(time, fk.dt, steps));
+  c = make_constants(grid_, n_, &lk, &dk);
+  c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
+  cf = force_constants(c, fk);
+  cs = step_constants(c, fk);
+  return {};
+}
+
 Status PbfDevice::solve(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, int iterations, PassTimes* times) {
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   Constants c = make_constants(grid_, n_, &lk, &dk);
   c.k3[2] = static_cast<float>(iterations), c.k3[3] = -1.0f;  // exactly `iterations` sweeps
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
-  std::uint32_t q = 0;
-  // A timestamp after everything recorded so far has finished (the barriers before it order the passes).
-  const auto stamp = [&](VkCommandBuffer cb) {
-    if (timed) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, q++);
-  };
+  Stamps stamp{timestamps_, timed};
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
+    stamp.reset(cb, 4 + 3 * kMaxTimedIterations);
     reset_sweeps(cb, true);
     stamp(cb);
     record_grid(cb, &c);
@@ -336,23 +368,14 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
 Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                           const Sweeps& sweeps, PassTimes* times) {
   const int iterations = std::max(sweeps.iterations, sweeps.max_iterations);
-  if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
-  lk_ = lk;
-  if (controller_) FF_CHECK(controller_->prepare_frame(0.0, fk.dt, 1));  // a lone sub-step: from time 0
-  if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
-  if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
-  Constants c = make_constants(grid_, n_, &lk, &dk);
-  c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
-  const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
+  Constants c, cf, cs;
+  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, 0.0, 1, c, cf, cs));  // a lone sub-step: from time 0
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
-  std::uint32_t q = 0;
-  const auto stamp = [&](VkCommandBuffer cb) {
-    if (timed) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, q++);
-  };
+  Stamps stamp{timestamps_, timed};
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    if (timed) vkCmdResetQueryPool(cb, timestamps_, 0, 4 + 3 * kMaxTimedIterations);
-    vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
+    stamp.reset(cb, 4 + 3 * kMaxTimedIterations);
+    reset_sweeps(cb, true);
     record_substep(cb, c, cf, cs, fk, sweeps, 0, stamp);
   }));
   return timed ? read_times(iterations, true, *times) : Status{};
@@ -530,18 +553,13 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time
   const sim::PbfLambdaConsts lk = solver.lambda_consts();
   const sim::PbfDeltaConsts dk = solver.delta_consts();
   sim::PbfForceConsts fk = solver.force_consts(plan.dt);
-  if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, plan.dt)));
-  lk_ = lk;
-  if (controller_) FF_CHECK(controller_->prepare_frame(time, plan.dt, plan.steps));
   const sim::SolverParams& sp = solver.params();
   const Sweeps sweeps{sp.iterations, sp.max_iterations, sp.max_density_error};
-  Constants c = make_constants(grid_, n_, &lk, &dk);
-  c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
-  const Constants cf = force_constants(c, fk), cs = step_constants(c, fk);
+  Constants c, cf, cs;
+  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, time, plan.steps, c, cf, cs));
   // Every sub-step in one submission: the device runs the frame without waiting for the host.
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    vkCmdFillBuffer(cb, state_.handle(), 16, 8, 0);
-    compute_barrier(cb);
+    reset_sweeps(cb, true);
     for (int s = 0; s < plan.steps; ++s) {
       fk.st_key = sim::surface_tension_step_key(time + s * double(plan.dt));  // the CPU's key for this sub-step
       record_substep(cb, c, cf, cs, fk, sweeps, s, [](VkCommandBuffer) {});

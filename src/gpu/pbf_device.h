@@ -178,6 +178,8 @@ class PbfDevice {
   void record_sweeps(VkCommandBuffer cb, const void* constants, const Sweeps& sweeps, Stamp&& stamp, float dt) const;
   Status read_times(int iterations, bool with_force, PassTimes& times) const;
   void reset_sweeps(VkCommandBuffer cb, bool frame) const;
+  Status prepare_substeps(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
+                          const Sweeps& sweeps, double time, int steps, Constants& c, Constants& cf, Constants& cs);
 
   Context* ctx_ = nullptr;
   std::size_t n_ = 0;

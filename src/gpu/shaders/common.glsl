@@ -27,6 +27,17 @@ ivec3 cell_coord(vec3 p) {
   return clamp(c, ivec3(0), C.grid_dims.xyz - 1);
 }
 uint cell_index(ivec3 c) { return uint(c.x + C.grid_dims.x * (c.y + C.grid_dims.y * c.z)); }
+
+// Every cell within `reach` cells of c on each axis, clamped to the grid, z outermost and x innermost (the order,
+// and with it every float sum over neighbours, is fixed): reach 1 gives the 27 cells around c, which hold every
+// neighbour within a cell edge.
+#define FOR_CELLS_AROUND(c, reach, CELL)                                                              \
+  for (int dz = max(c.z - reach, 0); dz <= min(c.z + reach, C.grid_dims.z - 1); ++dz)                 \
+    for (int dy = max(c.y - reach, 0); dy <= min(c.y + reach, C.grid_dims.y - 1); ++dy)               \
+      for (int dx = max(c.x - reach, 0); dx <= min(c.x + reach, C.grid_dims.x - 1); ++dx) {            \
+        const uint CELL = cell_index(ivec3(dx, dy, dz));
+#define END_FOR_CELLS }
+
 ivec3 cell_of_index(uint c) {
   const uint nx = uint(C.grid_dims.x), ny = uint(C.grid_dims.y);
   return ivec3(int(c % nx), int((c / nx) % ny), int(c / (nx * ny)));

@@ -1,6 +1,5 @@
 // The adaptive controller's passes (control/adaptive.cpp is the CPU reference; gpu/adaptive_device.h): their
-// push-constant block, the sample buffers every pass binds at the same slots, and the loop over the grid cells
-// within H_c of a cell.
+// push-constant block, and the seed field's cells (the loop over the grid cells around a cell is common.glsl's).
 #define FF_OWN_CONSTANTS
 layout(push_constant) uniform ControlConstants {
   vec4 grid_lo;     // as common.glsl
@@ -18,13 +17,6 @@ layout(push_constant) uniform ControlConstants {
 // a flood pass.
 #include "common.glsl"
 
-// Every cell within `reach` cells of c on each axis, clamped to the grid: a box of cells covering the ball of H_c.
-#define FOR_CELLS_AROUND(c, reach, CELL)                                                              \
-  for (int dz = max(c.z - reach, 0); dz <= min(c.z + reach, C.grid_dims.z - 1); ++dz)                 \
-    for (int dy = max(c.y - reach, 0); dy <= min(c.y + reach, C.grid_dims.y - 1); ++dy)               \
-      for (int dx = max(c.x - reach, 0); dx <= min(c.x + reach, C.grid_dims.x - 1); ++dx) {            \
-        const uint CELL = cell_index(ivec3(dx, dy, dz));
-#define END_FOR_CELLS }
 
 // The seed field: cell of a position (clamped) and the centre of a cell.
 ivec3 field_coord(vec3 p) {

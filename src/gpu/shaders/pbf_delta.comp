@@ -23,29 +23,24 @@ void main() {
   const float lam_i = lambda[i];
   const ivec3 ci = cell_of_index(cell[i]);  // the cell the grid was built with
   vec3 d = vec3(0.0);
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const ivec3 cj = ci + ivec3(dx, dy, dz);
-        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-        const uint c = cell_index(cj);
-        for (uint k = start[c]; k < start[c + 1u]; ++k) {
-          const uint j = items[k];
-          const vec3 r = xi - pos[j].xyz;
-          const float r2 = dot(r, r);
-          if (r2 >= h2 || r2 <= 0.0) continue;  // no gradient beyond h, none at r = 0 (itself included)
-          const float len = sqrt(r2);
-          float l = lam_i + lambda[j];
-          if (scorr_n > 0) {
-            const float q2 = h2 - r2;
-            const float ratio = w_ratio * q2 * q2 * q2;
-            float pw = ratio;
-            for (int e = 1; e < scorr_n; ++e) pw *= ratio;
-            l += scorr_c * pw;
-          }
-          const float q = h - len;
-          d += (l * kgrad * q * q / len) * r;
-        }
+  FOR_CELLS_AROUND(ci, 1, c)
+    for (uint k = start[c]; k < start[c + 1u]; ++k) {
+      const uint j = items[k];
+      const vec3 r = xi - pos[j].xyz;
+      const float r2 = dot(r, r);
+      if (r2 >= h2 || r2 <= 0.0) continue;  // no gradient beyond h, none at r = 0 (itself included)
+      const float len = sqrt(r2);
+      float l = lam_i + lambda[j];
+      if (scorr_n > 0) {
+        const float q2 = h2 - r2;
+        const float ratio = w_ratio * q2 * q2 * q2;
+        float pw = ratio;
+        for (int e = 1; e < scorr_n; ++e) pw *= ratio;
+        l += scorr_c * pw;
       }
+      const float q = h - len;
+      d += (l * kgrad * q * q / len) * r;
+    }
+  END_FOR_CELLS
   next[i] = vec4(clamp(xi + C.wall_lo.w * d, C.wall_lo.xyz, C.wall_hi.xyz), 0.0);
 }

@@ -54,24 +54,19 @@ void main() {
   uint count = 0u;
   if (xsph != 0.0 || drag) {
     const ivec3 ci = cell_of_index(cell[i]);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const ivec3 cj = ci + ivec3(dx, dy, dz);
-          if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-          const uint c = cell_index(cj);
-          for (uint k = start[c]; k < start[c + 1u]; ++k) {
-            const uint j = items[k];
-            const vec3 r = xi - pos[j].xyz;
-            const float r2 = dot(r, r);
-            if (j == i || r2 >= h2) continue;
-            const float q2 = h2 - r2;
-            s += (mk * q2 * q2 * q2 / density[j]) * (vel[j].xyz - vi);  // (m/ρ_j) W_ij (v_j − v_i)
-            ++count;
-            const float d = dot(dir, r);
-            if (r2 > 0.0 && d > 0.0) best = max(best, d * d / r2);
-          }
-        }
+    FOR_CELLS_AROUND(ci, 1, c)
+      for (uint k = start[c]; k < start[c + 1u]; ++k) {
+        const uint j = items[k];
+        const vec3 r = xi - pos[j].xyz;
+        const float r2 = dot(r, r);
+        if (j == i || r2 >= h2) continue;
+        const float q2 = h2 - r2;
+        s += (mk * q2 * q2 * q2 / density[j]) * (vel[j].xyz - vi);  // (m/ρ_j) W_ij (v_j − v_i)
+        ++count;
+        const float d = dot(dir, r);
+        if (r2 > 0.0 && d > 0.0) best = max(best, d * d / r2);
+      }
+    END_FOR_CELLS
   }
   vec3 a = g + xsph * s;
   if (drag) a += drag_acceleration(vi, speed2, count, best);

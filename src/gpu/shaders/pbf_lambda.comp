@@ -23,29 +23,24 @@ void main() {
   const ivec3 ci = cell_of_index(cell[i]);  // the cell the grid was built with
   float sw = 0.0, g2 = 0.0;
   vec3 grad = vec3(0.0);
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const ivec3 cj = ci + ivec3(dx, dy, dz);
-        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-        const uint c = cell_index(cj);
-        for (uint k = start[c]; k < start[c + 1u]; ++k) {
-          const uint j = items[k];
-          if (j == i) continue;
-          const vec3 r = xi - pos[j].xyz;
-          const float r2 = dot(r, r);
-          if (r2 >= h2) continue;
-          const float q2 = h2 - r2;
-          sw += q2 * q2 * q2;
-          if (r2 > 0.0) {  // a coincident particle adds density but no gradient
-            const float len = sqrt(r2);
-            const float q = h - len;
-            const float cc = cgrad * q * q / len;  // ∇_j C_i = cc · r
-            g2 += cc * cc * r2;
-            grad += cc * r;
-          }
-        }
+  FOR_CELLS_AROUND(ci, 1, c)
+    for (uint k = start[c]; k < start[c + 1u]; ++k) {
+      const uint j = items[k];
+      if (j == i) continue;
+      const vec3 r = xi - pos[j].xyz;
+      const float r2 = dot(r, r);
+      if (r2 >= h2) continue;
+      const float q2 = h2 - r2;
+      sw += q2 * q2 * q2;
+      if (r2 > 0.0) {  // a coincident particle adds density but no gradient
+        const float len = sqrt(r2);
+        const float q = h - len;
+        const float cc = cgrad * q * q / len;  // ∇_j C_i = cc · r
+        g2 += cc * cc * r2;
+        grad += cc * r;
       }
+    }
+  END_FOR_CELLS
   const float rho = mass * (w0 + poly6_k * sw);
   density[i] = rho;
   const float constraint = max(rho / rho0 - 1.0, 0.0);

@@ -21,20 +21,15 @@ vec4 held[kHeld];        // per neighbour: its offset in the points' frame / h, 
 
 // Whether any neighbour covers point p (the slow path, for a particle with more than kHeld neighbours).
 bool covered_by_grid(vec3 p, uint i, vec3 xi, ivec3 ci, mat3 rot, float inv_h, float h2, float half_gap) {
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const ivec3 cj = ci + ivec3(dx, dy, dz);
-        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-        const uint c = cell_index(cj);
-        for (uint k = start[c]; k < start[c + 1u]; ++k) {
-          const uint j = items[k];
-          const vec3 d = pos[j].xyz - xi;
-          if (j == i || dot(d, d) >= h2) continue;
-          const vec3 r = d * inv_h;
-          if (dot(p, transpose(rot) * r) >= 0.5 * dot(r, r) + half_gap) return true;
-        }
-      }
+  FOR_CELLS_AROUND(ci, 1, c)
+    for (uint k = start[c]; k < start[c + 1u]; ++k) {
+      const uint j = items[k];
+      const vec3 d = pos[j].xyz - xi;
+      if (j == i || dot(d, d) >= h2) continue;
+      const vec3 r = d * inv_h;
+      if (dot(p, transpose(rot) * r) >= 0.5 * dot(r, r) + half_gap) return true;
+    }
+  END_FOR_CELLS
   return false;
 }
 
@@ -48,20 +43,15 @@ void main() {
   // Step 1: the classifier over the neighbours within h.
   uint count = 0u;
   vec3 offsets = vec3(0.0);
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const ivec3 cj = ci + ivec3(dx, dy, dz);
-        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-        const uint c = cell_index(cj);
-        for (uint k = start[c]; k < start[c + 1u]; ++k) {
-          const uint j = items[k];
-          const vec3 d = pos[j].xyz - xi;
-          if (j == i || dot(d, d) >= h2) continue;
-          offsets += d;
-          ++count;
-        }
-      }
+  FOR_CELLS_AROUND(ci, 1, c)
+    for (uint k = start[c]; k < start[c + 1u]; ++k) {
+      const uint j = items[k];
+      const vec3 d = pos[j].xyz - xi;
+      if (j == i || dot(d, d) >= h2) continue;
+      offsets += d;
+      ++count;
+    }
+  END_FOR_CELLS
   cls[i] = 0u;
   normal[i] = vec4(0.0);
   curv[i] = 0.0;
@@ -72,20 +62,15 @@ void main() {
   const mat3 inv_rot = transpose(rot);
   if (count <= kHeld) {
     uint m = 0u;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const ivec3 cj = ci + ivec3(dx, dy, dz);
-          if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-          const uint c = cell_index(cj);
-          for (uint k = start[c]; k < start[c + 1u]; ++k) {
-            const uint j = items[k];
-            const vec3 d = pos[j].xyz - xi;
-            if (j == i || dot(d, d) >= h2) continue;
-            const vec3 r = d * inv_h;
-            held[m++] = vec4(inv_rot * r, 0.5 * dot(r, r) + half_gap);
-          }
-        }
+    FOR_CELLS_AROUND(ci, 1, c)
+      for (uint k = start[c]; k < start[c + 1u]; ++k) {
+        const uint j = items[k];
+        const vec3 d = pos[j].xyz - xi;
+        if (j == i || dot(d, d) >= h2) continue;
+        const vec3 r = d * inv_h;
+        held[m++] = vec4(inv_rot * r, 0.5 * dot(r, r) + half_gap);
+      }
+    END_FOR_CELLS
   }
   uint free_count = 0u;
   vec3 free_sum = vec3(0.0);

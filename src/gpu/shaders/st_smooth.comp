@@ -21,22 +21,17 @@ void main() {
   const ivec3 ci = cell_of_index(cell[i]);
   vec3 nsum = vec3(0.0);
   float ksum = 0.0, wsum = 0.0;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const ivec3 cj = ci + ivec3(dx, dy, dz);
-        if (any(lessThan(cj, ivec3(0))) || any(greaterThanEqual(cj, C.grid_dims.xyz))) continue;
-        const uint c = cell_index(cj);
-        for (uint k = start[c]; k < start[c + 1u]; ++k) {
-          const uint j = items[k];
-          const vec3 d = pos[j].xyz - xi;
-          if (j == i || dot(d, d) >= h2 || cls[j] != 1u) continue;
-          const float w = 1.0 - length(d) * inv_h;
-          nsum += w * normal[j].xyz;
-          ksum += w * curv[j];
-          wsum += w;
-        }
-      }
+  FOR_CELLS_AROUND(ci, 1, c)
+    for (uint k = start[c]; k < start[c + 1u]; ++k) {
+      const uint j = items[k];
+      const vec3 d = pos[j].xyz - xi;
+      if (j == i || dot(d, d) >= h2 || cls[j] != 1u) continue;
+      const float w = 1.0 - length(d) * inv_h;
+      nsum += w * normal[j].xyz;
+      ksum += w * curv[j];
+      wsum += w;
+    }
+  END_FOR_CELLS
   const float nlen = length(nsum);
   if (nlen > 0.0) nsum /= nlen;
   const vec3 own = normal[i].xyz;
