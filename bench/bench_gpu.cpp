@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     const sim::PbfDeltaConsts dk = solver.delta_consts();
     sim::PbfForceConsts fk = solver.force_consts(dt);
     fk.st_key = sim::surface_tension_step_key(0.0);  // the CPU sub-step's (time 0)
-    auto grid = gpu::GridSpec::covering(b.dom.min, b.dom.max, lk.h * 1.1f);
+    auto grid = gpu::GridSpec::for_support(b.dom.min, b.dom.max, lk.h);
     if (!grid) return fmt::print(stderr, "bench_gpu: {}\n", grid.error().message), 1;
     auto dev = gpu::PbfDevice::create(**ctx, n, *grid);
     if (!dev) return fmt::print(stderr, "bench_gpu: {}\n", dev.error().message), 1;

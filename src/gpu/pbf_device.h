@@ -35,6 +35,10 @@ struct GridSpec {
 
   /// The grid of cells of edge `cell` covering the box [lo, hi]; an Error if it has more than `max_cells`.
   static Result<GridSpec> covering(const Vec3f& lo, const Vec3f& hi, float cell, std::size_t max_cells = 1u << 26);
+  /// The grid a sub-step uses for support h over [lo, hi]: cells of kSkin · h. It is built on x once a sub-step and
+  /// the sweeps move x*, so a pair that comes within h during the sub-step must still lie in the 27 cells around.
+  static constexpr float kSkin = 1.1f;
+  static Result<GridSpec> for_support(const Vec3f& lo, const Vec3f& hi, float h) { return covering(lo, hi, kSkin * h); }
   std::size_t cells() const {
     return static_cast<std::size_t>(dims[0]) * static_cast<std::size_t>(dims[1]) * static_cast<std::size_t>(dims[2]);
   }

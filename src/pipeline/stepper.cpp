@@ -66,8 +66,7 @@ class GpuStepper final : public FrameStepper {
     FF_TRY(s->context_, gpu::Context::create({.device = device_index, .validation = false}));
     const gpu::DeviceInfo& info = s->context_->info();
     s->name_ = fmt::format("{} ({})", info.name, info.driver);
-    // Cells 10 % above H_p: the grid is built on x once a sub-step and the iterations move x*.
-    FF_TRY(const gpu::GridSpec grid, gpu::GridSpec::covering(dom.min, dom.max, s->solver_.lambda_consts().h * 1.1f));
+    FF_TRY(const gpu::GridSpec grid, gpu::GridSpec::for_support(dom.min, dom.max, s->solver_.lambda_consts().h));
     FF_TRY(s->fluid_, gpu::PbfDevice::create(*s->context_, p.size(), grid));
     FF_CHECK(s->fluid_->set_state(p.position, p.velocity));
     FF_CHECK(s->fluid_->set_ids(p.id));

@@ -61,7 +61,7 @@ TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
 
   auto ctx = Context::create({.device = -1, .validation = true});
   ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
-  const GridSpec grid = GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value();
+  const GridSpec grid = GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value();
   std::vector<Vec3f> free_x;  // the same frame without the controller: what the control changes
   for (const bool controlled : {true, false}) {
     auto dev = PbfDevice::create(**ctx, start.size(), grid);
@@ -135,7 +135,7 @@ TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
   auto ctx = Context::create({.device = -1, .validation = true});
   ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
   auto dev = PbfDevice::create(**ctx, start.size(),
-                               GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
   auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, s.params);
@@ -214,7 +214,7 @@ TEST(GpuAdaptive, AMovingTargetTracksTheCpuController) {
   auto ctx = Context::create({.device = -1, .validation = true});
   ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
   auto dev = PbfDevice::create(**ctx, start.size(),
-                               GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
   ASSERT_TRUE((*dev)->set_ids(start.id).ok());
@@ -259,7 +259,7 @@ TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   ASSERT_TRUE(ctx.has_value());
   const sim::PbfSolver solver(s.c.sp, s.c.dom);
   s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
-  auto dev = PbfDevice::create(**ctx, 100, GridSpec::covering(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h * 1.1f).value());
+  auto dev = PbfDevice::create(**ctx, 100, GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value());
   control::AdaptiveParams kinematic = s.params;
   kinematic.kinematic = true;

@@ -203,8 +203,8 @@ TEST(GpuPbf, SweepsTrackTheCpuAndRepeatBitForBit) {
   const CpuSweeps cpu = cpu_sweeps(f, kIterations);
   auto ctx = make_context();
   ASSERT_TRUE(ctx);
-  // A cell edge 10 % above h: the list is built once on x*, which then moves (as the CPU's cluster boxes).
-  auto dev = PbfDevice::create(*ctx, f.x.size(), grid_for(f, 1.1f));
+  // Cells of GridSpec::kSkin · h: the list is built once on x*, which then moves (as the CPU's cluster boxes).
+  auto dev = PbfDevice::create(*ctx, f.x.size(), grid_for(f, GridSpec::kSkin));
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   std::vector<Vec3f> first, second;
   for (std::vector<Vec3f>* out : {&first, &second}) {
@@ -254,7 +254,7 @@ SubstepRun run_substeps(const sim::SolverParams& sp, const sim::Domain& dom, con
     sim::StageTimes t;
     solver.substep(cpu, 0.2 + s * double(dt), dt, none, t);
   }
-  auto dev = PbfDevice::create(ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  auto dev = PbfDevice::create(ctx, start.size(), GridSpec::for_support(dom.min, dom.max, solver.lambda_consts().h).value());
   EXPECT_TRUE(dev.has_value()) << dev.error().message;
   if (!dev) return r;
   EXPECT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
@@ -334,7 +334,7 @@ TEST(GpuPbf, SurfaceTensionPerParticleMatchesTheCpu) {
   cpu.add_accelerations(p.position, p.id, solver.neighbors(), st, kDt, fk.st_key, a);
   auto ctx = make_context();
   ASSERT_TRUE(ctx);
-  auto dev = PbfDevice::create(*ctx, p.size(), GridSpec::covering(dom.min, dom.max, sp.support() * 1.1f).value());
+  auto dev = PbfDevice::create(*ctx, p.size(), GridSpec::for_support(dom.min, dom.max, sp.support()).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(p.position, p.velocity).ok());
   ASSERT_TRUE((*dev)->set_ids(p.id).ok());
@@ -447,7 +447,7 @@ TEST(GpuPbf, FramesTakeTheCpuSubstepsAndTrackItsPositions) {
   sim::NoController none;
   auto ctx = make_context();
   ASSERT_TRUE(ctx);
-  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::for_support(dom.min, dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
   for (int f = 0; f < 2; ++f) {
@@ -493,7 +493,7 @@ TEST(GpuPbf, MoreSweepsWhileCompressedAsTheCpu) {
   ASSERT_TRUE(c.has_value());
   auto ctx = make_context();
   ASSERT_TRUE(ctx);
-  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  auto dev = PbfDevice::create(*ctx, start.size(), GridSpec::for_support(dom.min, dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
   ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok());
   auto g = (*dev)->advance(solver, 0.2, 1.0 / 60.0);
@@ -520,7 +520,7 @@ TEST(GpuPbf, ABlowUpNamesTheParticle) {
   for (std::size_t i = 0; i < x.size(); ++i) x[i] = Vec3f(0.1f + 0.02f * float(i % 10), 0.1f + 0.02f * float(i / 10), 0.5f);
   v[37] = Vec3f(0.0f, std::nanf(""), 0.0f);
   v[61] = Vec3f(INFINITY, 0.0f, 0.0f);
-  auto dev = PbfDevice::create(*ctx, x.size(), GridSpec::covering(dom.min, dom.max, solver.lambda_consts().h * 1.1f).value());
+  auto dev = PbfDevice::create(*ctx, x.size(), GridSpec::for_support(dom.min, dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value());
   ASSERT_TRUE((*dev)->set_state(x, v).ok());
   auto f = (*dev)->advance(solver, 0.0, 1.0 / 60.0);
