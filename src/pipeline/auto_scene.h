@@ -59,11 +59,13 @@ double clip_seam(const pose::TargetSkin& skin, const io::TriangleMesh& mesh);
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);
 
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
-/// automatic fluid, each target's `volume` becomes the volume its control samples stand for (voxel count at
-/// the sampling spacing, sparse-sampling drops removed; an open sheet's: one spacing³ per surface sample), which is what
-/// the fluid is sized and shared by. An animated target's is that times its posed mesh's smallest share of its bind
-/// volume over the clip (posed_volume_share), so that its fluid fits inside it at every pose. Each closed target's
-/// thinnest walls are measured into its `thickness`.
+/// automatic fluid, each target's `volume` becomes its fluid's: 95.5 % of the lattice cells its solid covers at the
+/// sampling spacing (sampling::lattice_cells; the share a figure on thin legs holds), sparse-sampling drops removed
+/// (an open sheet's: one spacing³ per surface sample), which is what the fluid is sized and shared by. An animated
+/// target's is that times its posed mesh's smallest share of its bind volume over the clip (posed_volume_share), so
+/// that its fluid fits inside it at every pose. Each closed target's thinnest walls are measured into its
+/// `thickness`. Each automatic column holds its target's volume to the particle (sim::boxes_for_count on the
+/// domain's lattice).
 Status complete_scene(scene::Scene& scene, std::vector<TargetGeometry>& targets);
 
 /// One line when target k's thinnest walls (TargetGeometry::thickness) are under 3 control spacings (they may come out

@@ -54,6 +54,19 @@ double estimate_sample_count(bool solid, double volume, double area, float d);
 
 // The stages, exposed for tests and benchmarks.
 std::vector<Vec3f> voxel_samples(const MeshField& field, float spacing);
+
+/// The solid's volume as cells of a lattice of spacing d: the lattice points of voxel_samples (and one more layer
+/// round them), each with the share of its cell the solid covers, clamp(½ − s/d, 0, 1) from its signed distance s
+/// (the smoothed step enclosed_volume takes on the SDF grid): 1 deep inside, 0 outside, a fraction next to the
+/// surface. Only points with a 6-neighbour on the other side of the surface ask for a distance. Unlike a count of
+/// the points inside, a wall 4.9 spacings thick reads 4.9 cells and not the 4 lattice layers that fit: what the
+/// fluid is sized by (pipeline/auto_scene.h), so that a thin part gets as much fluid as its samples stand for.
+struct LatticeCells {
+  std::vector<Vec3f> point;  ///< lattice points whose share is positive
+  std::vector<float> share;  ///< (0, 1], the covered share of the point's cell
+  double cells() const;      ///< Σ share, summed in order
+};
+LatticeCells lattice_cells(const MeshField& field, float spacing);
 std::vector<Vec3f> random_interior_points(const SdfGrid& sdf, const Aabb& box, std::size_t count, std::uint64_t seed);
 std::vector<Vec3f> random_surface_points(const io::TriangleMesh& mesh, std::size_t count, std::uint64_t seed);
 

@@ -64,6 +64,31 @@ std::size_t estimate_particle_count(std::span<const FluidSource> sources, const 
   return static_cast<std::size_t>(std::min(total, 1e18));
 }
 
+std::vector<FluidSource> boxes_for_count(const FluidSource& column, const Domain& domain, float r, std::size_t count) {
+  const Lattice l = lattice_of(domain, r);
+  int b[3], e[3];
+  for (int a = 0; a < 3; ++a) index_range(l, a, column.min[a], column.max[a], b[a], e[a]);
+  const auto nx = static_cast<std::size_t>(std::max(0, e[0] - b[0] + 1)), nz = static_cast<std::size_t>(std::max(0, e[2] - b[2] + 1));
+  std::vector<FluidSource> out;
+  if (count == 0 || nx == 0 || nz == 0 || b[1] >= l.count[1]) return out;
+  // Lattice coordinate of index i along axis a, and a box edge half a spacing outside it.
+  const auto at = [&](int a, std::size_t i) { return l.origin[a] + l.d * float(i); };
+  const float h = 0.5f * l.d;
+  const auto box = [&](std::size_t x0, std::size_t x1, std::size_t y0, std::size_t y1, std::size_t z0, std::size_t z1) {
+    FluidSource s = column;
+    s.shape = FluidSource::Shape::Box;
+    s.min = Vec3f(at(0, x0) - h, at(1, y0) - h, at(2, z0) - h);
+    s.max = Vec3f(at(0, x1) + h, at(1, y1) + h, at(2, z1) + h);
+    out.push_back(s);
+  };
+  const auto x0 = std::size_t(b[0]), y0 = std::size_t(b[1]), z0 = std::size_t(b[2]);
+  const std::size_t layer = nx * nz, layers = count / layer, rows = (count % layer) / nx, rest = count % nx;
+  if (layers > 0) box(x0, x0 + nx - 1, y0, y0 + layers - 1, z0, z0 + nz - 1);
+  if (rows > 0) box(x0, x0 + nx - 1, y0 + layers, y0 + layers, z0, z0 + rows - 1);
+  if (rest > 0) box(x0, x0 + rest - 1, y0 + layers, y0 + layers, z0 + rows, z0 + rows);
+  return out;
+}
+
 Status fill_sources(std::span<const FluidSource> sources, const Domain& domain, float r, ParticleSet& p,
                     std::size_t max_particles) {
   const std::size_t estimate = estimate_particle_count(sources, domain, 2.0f * r);

@@ -3,6 +3,8 @@
 // wall, up to sampling.max_auto_count and what the memory limit allows; a count the scene names is kept.
 #include "pipeline/auto_scene.h"
 #include "pipeline/run_budget.h"
+#include "sampling/samplers.h"
+#include "sim/emitter.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
 
@@ -66,9 +68,34 @@ TEST_F(AutoSizing, AThinWallGetsThreeSpacingsAcrossIt) {
   EXPECT_TRUE(z.limited_by.empty());
   EXPECT_NEAR(wall / c.scene.solver.spacing(), kWallSpacings, 0.01);
   EXPECT_FALSE(thin_wall_warning(c.scene, 0, c.targets[0]).has_value());
-  // The fluid is sized at the new spacing: its column holds the plate's voxel volume.
-  ASSERT_EQ(c.scene.fluid.size(), 1u);
-  EXPECT_NEAR(c.targets[0].volume, 0.02, 0.004);
+  // The fluid is sized at the new spacing: kCellShare (0.955) of the plate's volume.
+  EXPECT_NEAR(c.targets[0].volume, 0.955 * 0.02, 0.0003);
+}
+
+// A flat target gets nearly as much fluid as its samples stand for (issue 44: the 3 cm gear's fluid was 0.68–0.72 of its
+// samples, from a count of the lattice points inside, 4 of its 4.9 layers, and a column that filled only whole layers):
+// now kCellShare (0.955) of the cells it covers, to the particle.
+TEST_F(AutoSizing, AFlatTargetsFluidNearlyMatchesItsSamples) {
+  test::write_obj(dir_ / "gear.obj", test::gear(24, 0.4f, 0.5f, 0.03f));
+  for (const double count : {3000.0, 10000.0}) {
+    const auto c = complete(dir_, fmt::format(R"({{"targets": [{{"mesh": "gear.obj"}}], "sampling": {{"auto_count": {}}}}})", count));
+    sim::ParticleSet fluid;
+    ASSERT_TRUE(sim::fill_sources(c.scene.fluid, c.scene.domain, c.scene.solver.particle_radius, fluid).ok());
+    const float d = c.scene.solver.spacing();
+    // The column holds its volume to the particle.
+    EXPECT_EQ(double(fluid.size()), std::round(c.targets[0].volume / (double(d) * d * d)));
+    EXPECT_GT(double(fluid.size()), 1.05 * double(sampling::voxel_samples(*c.targets[0].field, d).size()));
+    sampling::SamplingParams p = c.scene.sampling;
+    p.spacing = d;
+    auto samples = sampling::sample_target(c.targets[0].mesh, p);
+    ASSERT_TRUE(samples.has_value()) << samples.error().message;
+    const double ratio = double(fluid.size()) / double(samples->size());
+    // At 3000 the disc is 1.7 spacings thick, and the sampler's spacing repair adds ~6 % to what its volume asks for
+    // where the relaxation left gaps (3 010 asked, 3 194 made): fluid sized before sampling cannot see those.
+    EXPECT_GT(ratio, count < 5000.0 ? 0.86 : 0.92) << count << " samples aimed at: " << fluid.size() << " fluid, "
+                                                   << samples->size() << " samples";
+    EXPECT_LT(ratio, 0.97) << count;
+  }
 }
 
 TEST_F(AutoSizing, TheBudgetHoldsTheCountBackAndTheLineSaysWhatWouldResolveIt) {

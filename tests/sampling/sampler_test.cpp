@@ -112,6 +112,27 @@ TEST(Samplers, VoxelSamplesOfABoxAreTheLatticeInside) {
   for (const auto& x : set->position) EXPECT_LT((x.cwiseAbs() - Vec3f(0.5f, 0.25f, 0.25f)).maxCoeff(), 0.0f);
 }
 
+// The solid's cells at a spacing: a slab 4.9 spacings thick reads 4.9 cells across, where the lattice points inside
+// are 4 layers; a ball reads its volume.
+TEST(Samplers, LatticeCellsCountThePartsOfCellsTheSolidCovers) {
+  const float d = 0.01f;
+  for (const float t : {4.9f, 3.3f, 1.6f}) {
+    auto slab = MeshField::build(test::box(Vec3f(0.3f, 0.5f * t * d, 0.2f)));
+    ASSERT_TRUE(slab.has_value());
+    const double cells = lattice_cells(*slab, d).cells(), exact = 0.6 * 0.4 * t * d / (double(d) * d * d);
+    EXPECT_NEAR(cells, exact, 0.02 * exact) << t << " spacings";
+    EXPECT_LE(double(voxel_samples(*slab, d).size()), std::floor(t) / t * exact * 1.001);  // whole layers only
+  }
+  auto ball = MeshField::build(test::uv_sphere(0.2f, 64));
+  ASSERT_TRUE(ball.has_value());
+  const auto cells = lattice_cells(*ball, d);
+  EXPECT_NEAR(cells.cells() * d * d * d, ball->volume(), 0.01 * ball->volume());
+  for (std::size_t i = 0; i < cells.share.size(); ++i) {
+    EXPECT_GT(cells.share[i], 0.0f);
+    EXPECT_LE(cells.share[i], 1.0f);
+  }
+}
+
 TEST(Samplers, BlueNoiseSphereIsSpreadInsideAndDeterministic) {
   const auto mesh = test::uv_sphere(0.5f, 48);
   SamplingParams p;

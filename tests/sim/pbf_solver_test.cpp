@@ -163,5 +163,34 @@ TEST(Emitter, OverlappingSourcesShareLatticePointsAndOutsideSourceIsAnError) {
   EXPECT_NE(st.error().message.find("fluid[0]"), std::string::npos);
 }
 
+// A column cut to an exact count: whole layers of its footprint from the bottom, then a part layer row by row.
+TEST(Emitter, BoxesForACountFillExactlyThatCountFromTheBottomOfTheColumn) {
+  const Domain dom{Vec3f::Zero(), Vec3f::Constant(1.0f)};
+  const float r = 0.025f;  // lattice at 0.025 + 0.05 i: a 0.2 × 0.2 footprint holds 4 × 4 points
+  const FluidSource column{FluidSource::Shape::Box, Vec3f(0.3f, 0.1f, 0.3f), Vec3f(0.5f, 0.2f, 0.5f)};
+  for (const std::size_t count : {0u, 1u, 3u, 4u, 7u, 16u, 17u, 37u, 100u}) {
+    const auto boxes = boxes_for_count(column, dom, r, count);
+    EXPECT_LE(boxes.size(), 3u);
+    ParticleSet p;
+    if (count > 0) {
+      ASSERT_TRUE(fill_sources(boxes, dom, r, p).ok()) << count;
+    }
+    EXPECT_EQ(p.size(), count);
+    float top = 0.0f;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      EXPECT_GE(p.position[i].x(), 0.3f);
+      EXPECT_LE(p.position[i].x(), 0.5f);
+      EXPECT_GE(p.position[i].y(), 0.1f);
+      top = std::max(top, p.position[i].y());
+    }
+    // The lowest layer that holds them all: ⌈count / 16⌉ layers from y = 0.125.
+    if (count > 0) {
+      EXPECT_NEAR(top, 0.125f + 0.05f * float((count + 15) / 16 - 1), 1e-5f) << count;
+    }
+  }
+  // A footprint off the domain's lattice holds nothing.
+  EXPECT_TRUE(boxes_for_count({FluidSource::Shape::Box, Vec3f::Constant(2.0f), Vec3f::Constant(3.0f)}, dom, r, 5).empty());
+}
+
 }  // namespace
 }  // namespace ff::sim
