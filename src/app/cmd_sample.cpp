@@ -29,6 +29,11 @@ int run_sample(SampleCli& o) {
   const auto& rep = s->report;
   spdlog::info("{} control particles ({}, spacing {:g} m, volume {:g} m^3, {} dropped) in {:.2f} s -> {}", s->set.size(),
                pipeline::sampler_name(rep.method), rep.spacing, rep.volume, rep.dropped, rep.seconds, o.out.string());
+  // Where the time went (SampleReport's stages), so a slow sampling says which stage to blame.
+  spdlog::info("  stages: mesh field {:.2f} s, SDF grid {:.2f} s, candidates + elimination {:.2f} s, relaxation {:.2f} s, "
+               "spacing repair {:.2f} s (+{} -{}), weights {:.2f} s",
+               rep.t_field, rep.t_sdf, rep.t_init, rep.t_relax, rep.t_repair, rep.repaired_added, rep.repaired_dropped,
+               rep.t_weights);
   return 0;
 }
 
