@@ -174,13 +174,8 @@ Status size_particles(scene::Scene& s, const std::vector<TargetGeometry>& target
   return {};
 }
 
-// The share of its covered cells a target's fluid fills (one rule for every shape and resolution). All of them
-// overfill a figure on thin legs: bench_scenes' star at 10k with 100 % of its cells as fluid formed, then drained 3 %
-// out under its feet for good; with 98 % it never formed, with 97 % only after 10 s, with 95.5 % at 1.6 s. The
-// thin-walled vase never formed with 101 %. bench/RESULTS.md, "Detail at scale, third part", has the family.
-constexpr double kCellShare = 0.955;
 
-// Target k's fluid volume: kCellShare of the lattice cells its solid covers at the control spacing dc
+// Target k's fluid volume: kFluidCellShare of the lattice cells its solid covers at the control spacing dc
 // (sampling::lattice_cells), less what the sparse-sampling options remove, and for a skinned target, what its
 // tightest pose keeps; an open sheet's is one layer of samples.
 // Sets t.volume and adds it to `volume` (a target with neither volume nor area is left as it was, and adds nothing).
@@ -213,7 +208,8 @@ Status size_target_fluid(const scene::Scene& s, std::size_t k, TargetGeometry& t
       dropped = dropped || ((x.array() >= b.min.array()).all() && (x.array() <= b.max.array()).all());
     covered += dropped ? 0.0 : double(cells.share[i]);
   }
-  t.volume = kCellShare * covered * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+  t.cells_volume = covered * (1.0 - s.sampling.sparse.drop_fraction) * double(dc) * dc * dc;
+  t.volume = kFluidCellShare * t.cells_volume;
   if (t.skin && t.skin->skin.joints.size() == t.mesh.vertices.size()) {
     // A skinned mesh can lose volume at its bends (linear blend skinning of a coarse mesh cuts their corners),
     // and the liquid keeps its own: sized to the bind volume, what the tightest pose has no room for is pushed
@@ -255,12 +251,28 @@ std::vector<std::size_t> place_fluid_columns(scene::Scene& s, const std::vector<
 }
 
 // Each automatic column cut to hold its count exactly on the domain's lattice (sim::boxes_for_count): a box
-// fills the whole layers that fit in it, and the columns over flat targets are only a few layers tall.
-void fit_columns(scene::Scene& s, const std::vector<std::size_t>& counts) {
+// fills the whole layers that fit in it, and the columns over flat targets are only a few layers tall. A column
+// whose footprint overlaps one placed before it starts a spacing above it (fill_sources counts a shared lattice
+// point once, so overlapping columns came out short), and an automatic domain grows to keep 2 H_c above the top.
+void fit_columns(scene::Scene& s, const std::vector<std::size_t>& counts, float hc) {
+  const float d = s.solver.spacing();
   std::vector<sim::FluidSource> fitted;
   for (std::size_t c = 0; c < s.fluid.size(); ++c) {
-    auto boxes = sim::boxes_for_count(s.fluid[c], s.domain, s.solver.particle_radius, counts[c]);
-    if (boxes.empty()) boxes.push_back(s.fluid[c]);  // its footprint holds no lattice point: fill_sources says so
+    sim::FluidSource column = s.fluid[c];
+    for (const auto& f : fitted) {
+      const bool overlaps = f.min.x() < column.max.x() && column.min.x() < f.max.x() && f.min.z() < column.max.z() &&
+                            column.min.z() < f.max.z() && f.min.y() < column.max.y() && column.min.y() < f.max.y();
+      if (overlaps) {
+        const float lift = f.max.y() + d - column.min.y();
+        column.min.y() += lift, column.max.y() += lift;
+      }
+    }
+    if (s.auto_domain) s.domain.max.y() = std::max(s.domain.max.y(), column.max.y() + 2.0f * hc);
+    auto boxes = sim::boxes_for_count(column, s.domain, s.solver.particle_radius, counts[c]);
+    if (boxes.empty()) boxes.push_back(column);  // its footprint holds no lattice point: fill_sources says so
+    // The part layer can stand a little above the column's box, and a narrow footprint's whole layers well above it.
+    for (const auto& b : boxes)
+      if (s.auto_domain) s.domain.max.y() = std::max(s.domain.max.y(), b.max.y() + 2.0f * hc);
     fitted.insert(fitted.end(), boxes.begin(), boxes.end());
   }
   s.fluid = std::move(fitted);
@@ -345,7 +357,7 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
   if (s.auto_radius) FF_CHECK(size_particles(s, targets, volume, area));
   const float d = s.solver.spacing(), hc = s.sampling.support_factor * d;
   if (s.fluid.empty()) {
-    // The fluid matches the volume the control samples will stand for, less kCellShare's margin: the lattice cells
+    // The fluid matches the volume the control samples will stand for, less kFluidCellShare's margin: the lattice cells
     // the solid covers at the spacing (the union of overlapping parts, not the sum a divergence-theorem volume
     // gives), less what the sparse-sampling options remove.
     const float dc = s.sampling.spacing > 0.0f ? s.sampling.spacing : d;
@@ -360,7 +372,7 @@ Status complete_scene(scene::Scene& s, std::vector<TargetGeometry>& targets) {
     column_counts = place_fluid_columns(s, targets, d);
   }
   if (s.auto_domain) size_domain(s, targets, hc);
-  if (!column_counts.empty()) fit_columns(s, column_counts);
+  if (!column_counts.empty()) fit_columns(s, column_counts, hc);
   return s.validate();
 }
 

@@ -1,9 +1,10 @@
 #pragma once
 // Completes a scene that names only its targets (docs/scenes.md: the smallest scene is {"targets":[{"mesh":...}]}):
 //   particle spacing  d = ∛(V / auto_count): the targets hold ~auto_count (10k) control samples and the fluid
-//                     as many particles (METHOD §0: d_c = d); when the scene names no count, more where a target's
-//                     thinnest wall would be under kWallSpacings spacings across (up to sampling.max_auto_count);
-//   fluid             one column per target, of the target's volume, standing on top of the target so it
+//                     kFluidCellShare of as many particles (METHOD §0: d_c = d); when the scene names no count,
+//                     more where a target's thinnest wall would be under kWallSpacings spacings across (up to
+//                     sampling.max_auto_count);
+//   fluid             one column per target, of its fluid's volume, standing on top of the target so it
 //                     pours down through the target's control band (METHOD §a.10: control only reaches H_c);
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
 //                     target, so the formed shape is held by the control, not by the floor.
@@ -31,7 +32,8 @@ inline constexpr double kWallSpacings = 3.0;
 struct TargetGeometry {
   io::TriangleMesh mesh;
   std::optional<sampling::MeshField> field;  ///< inside/outside of `mesh` (built once, for the layout)
-  double volume = 0.0;  ///< m³ (0 for an open sheet)
+  double volume = 0.0;        ///< m³ (0 for an open sheet); after complete_scene with an automatic fluid, its fluid's
+  double cells_volume = 0.0;  ///< m³: the lattice cells its solid covers, what its samples stand for (complete_scene)
   double area = 0.0;    ///< m²
   Aabb box;
   /// The skin of a target whose scene gives it an animation clip (io/skin.h; the clip found): null otherwise.
@@ -58,14 +60,22 @@ double clip_seam(const pose::TargetSkin& skin, const io::TriangleMesh& mesh);
 /// Loads every target with its transform (and the skin of an animated one). Errors name the target.
 Result<std::vector<TargetGeometry>> load_target_meshes(const scene::Scene& scene);
 
+/// The share of its covered lattice cells (sampling::lattice_cells) a closed target's automatic fluid fills: one rule
+/// for every shape and resolution (an open sheet gets one particle per sample). All of them overfill a figure on thin
+/// legs: bench_scenes' star at 10k with 100 % of its cells as fluid formed, then drained 3 % out under its feet for
+/// good; with 98 % it never formed, with 97 % only at 9.97 s, with 95.5 % at 1.6 s; the thin-walled vase with 101 %
+/// never formed. bench/RESULTS.md, "Detail at scale, third part", has the family.
+inline constexpr double kFluidCellShare = 0.955;
+
 /// Fills what the scene left out (auto_radius, auto_domain, an empty fluid list) from the targets. With an
-/// automatic fluid, each target's `volume` becomes its fluid's: 95.5 % of the lattice cells its solid covers at the
-/// sampling spacing (sampling::lattice_cells; the share a figure on thin legs holds), sparse-sampling drops removed
+/// automatic fluid, each target's `volume` becomes its fluid's: kFluidCellShare of the lattice cells its solid covers
+/// at the sampling spacing (sampling::lattice_cells), sparse-sampling drops removed
 /// (an open sheet's: one spacing³ per surface sample), which is what the fluid is sized and shared by. An animated
 /// target's is that times its posed mesh's smallest share of its bind volume over the clip (posed_volume_share), so
 /// that its fluid fits inside it at every pose. Each closed target's thinnest walls are measured into its
 /// `thickness`. Each automatic column holds its target's volume to the particle (sim::boxes_for_count on the
-/// domain's lattice).
+/// domain's lattice), stacked above any column before it whose footprint it overlaps, and an automatic domain is
+/// raised to keep 2 H_c above the tallest.
 Status complete_scene(scene::Scene& scene, std::vector<TargetGeometry>& targets);
 
 /// One line when target k's thinnest walls (TargetGeometry::thickness) are under 3 control spacings (they may come out

@@ -26,7 +26,11 @@ RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeom
   e.fluid_particles = sim::estimate_particle_count(scene.fluid, scene.domain, d);
   const float dc = scene.sampling.spacing > 0.0f ? scene.sampling.spacing : d;
   double samples = 0.0;
-  for (const auto& t : targets) samples += sampling::estimate_sample_count(t.volume > 0.0, t.volume, t.area, dc);
+  for (const auto& t : targets) {
+    // What the samples stand for: the covered cells once complete_scene has counted them (its fluid is less).
+    const double v = t.cells_volume > 0.0 ? t.cells_volume : t.volume;
+    samples += sampling::estimate_sample_count(t.volume > 0.0, v, t.area, dc);
+  }
   e.control_samples = static_cast<std::size_t>(std::min(samples, 1e18));
   // The targets' SDF grids (sampling/sdf_grid.h, at most kAutoSdfNodes nodes each): the metrics keep one per target
   // for the run (4 bytes a node), and sampling builds one at a time (16 bytes a node at the peak of its build).

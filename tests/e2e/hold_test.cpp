@@ -1,7 +1,9 @@
 // Does a formed shape hold (issue 44)? bench/hold.sh holds the 100k bunny to 10× its forming time (~1 h on two
-// cores); this is its small version for CI: the bunny at 20k control particles, run to at least 3× its forming
-// time, must stay formed from then on (≥ 99 % inside, ≤ 0.5 % splash at every frame) with E drifting < 0.2 pp
-// between the first and the last second after forming.
+// cores); this is its small version for CI: the bunny at 20k control particles, run for 10 s, must be formed by a
+// third of that (report.json's time_to_form_s: the first time from which every frame to the end has ≥ 99 % of the
+// fluid inside and ≤ 0.5 % splashed), so that it holds for at least twice as long as it took to form, and its E may
+// drift by < 0.03 pp between the first and the last second after forming (0.117 → 0.108 % when written; the 100k
+// bunny drifted +0.008 pp over 25 s).
 #include "e2e/cli_support.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
@@ -61,6 +63,7 @@ TEST(Hold, TheFormedBunnyAt20kHoldsForThreeTimesItsFormingTime) {
   for (std::size_t i = 0; i < time.size(); ++i)
     if (time[i] >= t0 - 1e-6) after.push_back(i);
   ASSERT_GE(after.size(), 120u);
+  // What time_to_form_s promises, checked against metrics.csv (the two are written by different code).
   double least_inside = 1.0, most_splash = 0.0;
   for (std::size_t i : after) {
     least_inside = std::min(least_inside, m["inside_fraction"][i]);
@@ -74,7 +77,7 @@ TEST(Hold, TheFormedBunnyAt20kHoldsForThreeTimesItsFormingTime) {
     return s / double(last - first);
   };
   const double e_first = mean_e(0, 60), e_last = mean_e(after.size() - 60, after.size());
-  EXPECT_LT(std::abs(e_last - e_first), 0.2) << "E over the first second after forming " << e_first << " %, over the last "
+  EXPECT_LT(std::abs(e_last - e_first), 0.03) << "E over the first second after forming " << e_first << " %, over the last "
                                              << e_last << " %";
   std::printf("20k bunny: formed at %.2f s, held to %.1f s (%.1fx): least inside %.2f %%, most splash %.2f %%, E %.4f -> %.4f %%\n",
               t0, end, end / t0, 100 * least_inside, 100 * most_splash, e_first, e_last);

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace ff::pipeline {
@@ -96,6 +97,21 @@ TEST_F(AutoSizing, AFlatTargetsFluidNearlyMatchesItsSamples) {
                                                    << samples->size() << " samples";
     EXPECT_LT(ratio, 0.97) << count;
   }
+}
+
+// Columns over targets whose footprints overlap are stacked, not merged (fill_sources counts a shared lattice point
+// once): every target's fluid is there to the particle, inside the automatic domain with 2 H_c above it.
+TEST_F(AutoSizing, OverlappingColumnsAreStackedAndHoldEveryTargetsFluid) {
+  const auto c = complete(dir_, R"({"targets": [{"mesh": "ball.obj"}, {"mesh": "ball.obj", "translate": [0.3, 0.6, 0]}]})");
+  ASSERT_EQ(c.targets.size(), 2u);
+  sim::ParticleSet fluid;
+  ASSERT_TRUE(sim::fill_sources(c.scene.fluid, c.scene.domain, c.scene.solver.particle_radius, fluid).ok());
+  const double d3 = std::pow(double(c.scene.solver.spacing()), 3.0);
+  const double want = std::round(c.targets[0].volume / d3) + std::round(c.targets[1].volume / d3);
+  EXPECT_EQ(double(fluid.size()), want);
+  float top = 0.0f;
+  for (std::size_t i = 0; i < fluid.size(); ++i) top = std::max(top, fluid.position[i].y());
+  EXPECT_LE(top + 2.0f * c.scene.sampling.support_factor * c.scene.solver.spacing(), c.scene.domain.max.y() + 1e-4f);
 }
 
 TEST_F(AutoSizing, TheBudgetHoldsTheCountBackAndTheLineSaysWhatWouldResolveIt) {
