@@ -32,7 +32,7 @@ RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeom
     samples += sampling::estimate_sample_count(t.volume > 0.0, v, t.area, dc);
   }
   e.control_samples = static_cast<std::size_t>(std::min(samples, 1e18));
-  // The targets' SDF grids (sampling/sdf_grid.h, at most kAutoSdfNodes nodes each): the metrics keep one per target
+  // The targets' SDF grids (sampling/sdf_grid.h, at most kAutoSdfNodes nodes each, the sampler's kSamplerSdfNodes): the metrics keep one per target
   // for the run (4 bytes a node), and sampling builds one at a time (16 bytes a node at the peak of its build).
   // Next to the samples they are small for a solid (~20 nodes per sample); for a thin shape in a large box, or
   // a sheet, they are most of the memory.
@@ -40,8 +40,8 @@ RunEstimate estimate_run(const scene::Scene& scene, const std::vector<TargetGeom
   for (const auto& t : targets) {
     const float metric_margin = 3.0f * d, sample_margin = 2.0f * dc;
     sdf_bytes += 4.0 * sampling::sdf_node_count(t.box, sampling::auto_sdf_spacing(t.box, metric_margin, d), metric_margin);
-    sdf_build_peak = std::max(
-        sdf_build_peak, 16.0 * sampling::sdf_node_count(t.box, sampling::auto_sdf_spacing(t.box, sample_margin, dc), sample_margin));
+    const float sample_sdf = sampling::auto_sdf_spacing(t.box, sample_margin, dc, sampling::kSamplerSdfNodes);
+    sdf_build_peak = std::max(sdf_build_peak, 16.0 * sampling::sdf_node_count(t.box, sample_sdf, sample_margin));
   }
   e.sdf_mib = (sdf_bytes + sdf_build_peak) / (1024.0 * 1024.0);
   e.memory_mib = kBaseMib + (kFluidKib * double(e.fluid_particles) + kSampleKib * samples) / 1024.0 + e.sdf_mib;

@@ -407,7 +407,7 @@ Result<ControlSet> sample_target(const io::TriangleMesh& mesh, const SamplingPar
   std::optional<SdfGrid> sdf;
   if (volume) {
     progress.begin("signed distance grid", 1);
-    FF_TRY(SdfGrid grid, SdfGrid::build(field, auto_sdf_spacing(field.bounds(), 2.0f * d, d), 2.0f * d));
+    FF_TRY(SdfGrid grid, SdfGrid::build(field, auto_sdf_spacing(field.bounds(), 2.0f * d, d, kSamplerSdfNodes), 2.0f * d));
     ignore_hidden_surfaces(grid);
     sdf = std::move(grid);
     progress.end();

@@ -413,9 +413,9 @@ Vec3f SdfGrid::project_to_surface(const Vec3f& p) const {
   return x;
 }
 
-float auto_sdf_spacing(const Aabb& box, float margin, float d) {
+float auto_sdf_spacing(const Aabb& box, float margin, float d, double max_nodes) {
   float s = 0.5f * d;
-  while (sdf_node_count(box, s, margin) > kAutoSdfNodes) s *= 1.25f;
+  while (sdf_node_count(box, s, margin) > max_nodes) s *= 1.25f;
   return s;
 }
 

@@ -82,10 +82,16 @@ struct SdfGrid {
 /// The most nodes an automatically sized grid has (256 MiB of values, ~1 GiB at the peak of its build).
 inline constexpr double kAutoSdfNodes = 64e6;
 
+/// The most nodes the sampler's grid has (32 MiB of values). Its grid only guides the relaxation and the spacing
+/// repair (every sample is checked against the mesh itself), and above ~250k samples half a spacing made it the
+/// slowest stage: the 1M bunny's grid of 32 M nodes took 15.9 of 33.6 s; at 4.3 M nodes (0.98 d) 3.0 of 19.4 s, with
+/// the same nearest-neighbour spacings (min 0.85 d, 1st percentile 0.89 d, mean 0.975 d; bench/RESULTS.md).
+inline constexpr double kSamplerSdfNodes = 8e6;
+
 /// The spacing of the SDF grids the sampler and the metrics build over a target: half the sample spacing d
 /// (0.6 d was measured to lose thin tips: the bunny's ear tips uncovered with 4 of 10 seeds), coarser in steps of
-/// 1.25 where `box` grown by `margin` would need more than kAutoSdfNodes nodes.
-float auto_sdf_spacing(const Aabb& box, float margin, float d);
+/// 1.25 where `box` grown by `margin` would need more than `max_nodes` nodes.
+float auto_sdf_spacing(const Aabb& box, float margin, float d, double max_nodes = kAutoSdfNodes);
 
 /// About the node count SdfGrid::build gives over `box` grown by `margin` at `spacing` (for memory budgets).
 double sdf_node_count(const Aabb& box, float spacing, float margin);
