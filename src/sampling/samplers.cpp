@@ -142,23 +142,37 @@ float automatic_spacing(const MeshField& field, std::size_t auto_count) {
   return static_cast<float>(std::sqrt(field.area() / (0.5 * std::sqrt(3.0) * n)));
 }
 
-std::vector<Vec3f> voxel_samples(const MeshField& field, float d) {
+namespace {
+
+// The cubic lattice of spacing d centred in the field's box: the cell centres of the whole cells that fit (a
+// tolerance so that 1.0 / 0.1 counts as 10), widened by `extra` points on every side; points in x-fastest order.
+struct CentredLattice {
+  Vec3i dims;
+  std::vector<Vec3f> point;
+};
+
+CentredLattice centred_lattice(const MeshField& field, float d, int extra) {
   const Aabb box = field.bounds();
   const Vec3f size = box.size();
-  // Cell centres of the whole cells that fit (a tolerance so that 1.0 / 0.1 counts as 10), centred in the
-  // box: a symmetric shape gets a symmetric set, and no sample sits on a face of a box-shaped target.
-  const Vec3i dims = ((size / d).array() + 1e-4f).floor().cast<int>().max(1);
-  const Vec3f origin = box.min + 0.5f * (size - (dims.cast<float>() - Vec3f::Ones()) * d);
-  std::vector<Vec3f> grid;
-  grid.reserve(static_cast<std::size_t>(dims.x()) * dims.y() * dims.z());
-  for (int k = 0; k < dims.z(); ++k)
-    for (int j = 0; j < dims.y(); ++j)
-      for (int i = 0; i < dims.x(); ++i) grid.push_back(origin + Vec3f(float(i), float(j), float(k)) * d);
-  std::vector<std::uint8_t> in(grid.size());
-  field.inside(grid, in);
+  CentredLattice l{((size / d).array() + 1e-4f).floor().cast<int>().max(1) + 2 * extra, {}};
+  const Vec3f origin = box.min + 0.5f * (size - (l.dims.cast<float>() - Vec3f::Ones()) * d);
+  l.point.reserve(static_cast<std::size_t>(l.dims.x()) * l.dims.y() * l.dims.z());
+  for (int k = 0; k < l.dims.z(); ++k)
+    for (int j = 0; j < l.dims.y(); ++j)
+      for (int i = 0; i < l.dims.x(); ++i) l.point.push_back(origin + Vec3f(float(i), float(j), float(k)) * d);
+  return l;
+}
+
+}  // namespace
+
+std::vector<Vec3f> voxel_samples(const MeshField& field, float d) {
+  // Centred in the box: a symmetric shape gets a symmetric set, and no sample sits on a face of a box-shaped target.
+  const CentredLattice l = centred_lattice(field, d, 0);
+  std::vector<std::uint8_t> in(l.point.size());
+  field.inside(l.point, in);
   std::vector<Vec3f> out;
-  for (std::size_t i = 0; i < grid.size(); ++i)
-    if (in[i]) out.push_back(grid[i]);
+  for (std::size_t i = 0; i < l.point.size(); ++i)
+    if (in[i]) out.push_back(l.point[i]);
   return out;
 }
 
@@ -169,20 +183,14 @@ double LatticeCells::cells() const {
 }
 
 LatticeCells lattice_cells(const MeshField& field, float d) {
-  const Aabb box = field.bounds();
-  const Vec3f size = box.size();
   // voxel_samples' lattice, one point wider on every side: an outside point there can still cover part of its cell.
-  const Vec3i dims = ((size / d).array() + 1e-4f).floor().cast<int>().max(1) + 2;
-  const Vec3f origin = box.min + 0.5f * (size - (dims.cast<float>() - Vec3f::Ones()) * d);
+  const CentredLattice lattice = centred_lattice(field, d, 1);
+  const Vec3i dims = lattice.dims;
+  const std::vector<Vec3f>& grid = lattice.point;
   const auto at = [&](int i, int j, int k) {
     return static_cast<std::size_t>(i) + static_cast<std::size_t>(dims.x()) * (static_cast<std::size_t>(j) +
                                                                                   static_cast<std::size_t>(dims.y()) * k);
   };
-  std::vector<Vec3f> grid;
-  grid.reserve(static_cast<std::size_t>(dims.x()) * dims.y() * dims.z());
-  for (int k = 0; k < dims.z(); ++k)
-    for (int j = 0; j < dims.y(); ++j)
-      for (int i = 0; i < dims.x(); ++i) grid.push_back(origin + Vec3f(float(i), float(j), float(k)) * d);
   std::vector<std::uint8_t> in(grid.size());
   field.inside(grid, in);
   // Points next to the surface: a 6-neighbour on the other side (off the lattice counts as outside).
