@@ -40,7 +40,7 @@ Command add_compare(CLI::App& app) {
   auto o = std::make_shared<CompareCli>();
   auto* compare = app.add_subcommand(
       "compare", "run controllers on a scene, one fresh process each, and tabulate the paper's Table 3 columns");
-  compare->add_option("scene", o->compare.scene_file, "scene file (JSON)")->required();
+  compare->add_option("scene", o->compare.scene_file, "scene file (JSON), or a mesh file: the smallest scene around it")->required();
   compare->add_option("--controllers", o->controllers, "comma-separated controllers to run (default: all, listed below)");
   compare->add_option("-o,--out", o->compare.out_dir,
                       "output folder: table.md, table.csv, table.json and one run folder per controller")

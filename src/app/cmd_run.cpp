@@ -90,7 +90,7 @@ fs::path default_scene() {
 Command add_run(CLI::App& app) {
   auto o = std::make_shared<RunCli>();
   auto* run = app.add_subcommand("run", "simulate a scene file into an output folder");
-  run->add_option("scene", o->scene_file, "scene file (JSON)")->required();
+  run->add_option("scene", o->scene_file, "scene file (JSON), or a mesh file (OBJ, FBX, glTF, PLY, STL, ...): the smallest scene around it")->required();
   run->add_option("-o,--out", o->run.out_dir, "output folder")->capture_default_str();
   run->add_option("--frames", o->frames, "output frames to simulate (overrides output.frames)")->check(CLI::Range(1, 10'000'000));
   run->add_flag("--resume", o->run.resume, "continue a killed run from OUT/checkpoint/");

@@ -36,7 +36,7 @@ Command add_serve(CLI::App& app) {
   auto o = std::make_shared<ServeCli>();
   auto* serve = app.add_subcommand(
       "serve", "live viewer: run a scene (or play back a run's folder) and watch, steer and edit it in a browser or WebXR headset");
-  serve->add_option("input", o->serve.input, "scene file (JSON), or the output folder of a finished run")->required();
+  serve->add_option("input", o->serve.input, "scene file (JSON), a mesh file (the smallest scene around it), or the output folder of a finished run")->required();
   serve->add_option("--port", o->serve.server.port, "TCP port (0: any free port, printed)")
       ->capture_default_str()
       ->check(CLI::Range(0, 65535));

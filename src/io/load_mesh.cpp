@@ -444,6 +444,19 @@ Status check_options(const fs::path& path, const LoadOptions& options) {
   return {};
 }
 
+}  // namespace
+
+bool is_mesh_extension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext.size() < 2 || ext == ".json") return false;
+  // Assimp's list is of its importers' extensions; asking needs no file and no scene.
+  const Assimp::Importer importer;
+  return importer.IsExtensionSupported(ext.c_str());
+}
+
+namespace {
+
 void configure(Assimp::Importer& importer) {
   // No logger is created, so Assimp logs into its default NullLogger: nothing reaches stdout or stderr.
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, kRemovedComponents);

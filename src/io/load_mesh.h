@@ -53,6 +53,10 @@ struct MeshLoadStats {
   std::size_t dropped_non_triangles = 0;  ///< point and line primitives
 };
 
+/// Whether Assimp reads files named like `path` (by its extension, case-insensitive; the file is not opened). JSON
+/// is a scene, never a mesh, here.
+bool is_mesh_extension(const std::filesystem::path& path);
+
 /// Reads the mesh file at `path` (any format Assimp supports) into one triangle mesh: node transforms applied,
 /// all meshes merged, identical positions welded, units kept as in the file, then `options.transform` applied.
 /// Degenerate triangles (repeated index, or |cross| ≤ 1e-12 × bbox diagonal²) and non-triangle primitives are

@@ -3,12 +3,18 @@
 #include "core/params.h"
 #include "core/printable.h"
 #include "io/json_reader.h"
+#include "io/load_mesh.h"
+#include "io/skin.h"
 #include "scene/fields_json.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace ff::scene {
@@ -140,16 +146,50 @@ std::string scene_keys_markdown() {
   return s;
 }
 
+namespace {
+
+// The smallest scene around a mesh file: the mesh as the one target, playing its first clip when it has a skin with
+// clips, everything else automatic (docs/scenes.md). The file is read here, so that a broken mesh is the same
+// one-line error a scene naming it would give, before any output is made.
+Result<Scene> mesh_scene(const fs::path& file) {
+  json j = {{"targets", json::array({{{"mesh", fs::absolute(file).lexically_normal().string()}}})}};
+  // OBJ, PLY, STL and OFF carry no skeleton: asking would only read the file twice.
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  FF_TRY(const io::TriangleMesh mesh, io::load_mesh(file));
+  if (ext != ".obj" && ext != ".ply" && ext != ".stl" && ext != ".off") {
+    FF_TRY(const std::optional<io::Skin> skin, io::load_skin(file, mesh, io::MeshTransform{}));
+    if (skin && !skin->clips.empty()) j["targets"][0]["animation"] = {{"clip", "0"}};
+  }
+  spdlog::info("{} is a mesh: running the smallest scene around it, {}", file.string(), j.dump());
+  return parse_scene(j.dump(), fs::current_path(), file.string());
+}
+
+}  // namespace
+
 Result<Scene> load_scene(const fs::path& file) {
   std::error_code ec;
   if (!fs::exists(file, ec)) return input_error(fmt::format("{}: no such scene file", file.string()));
   if (fs::is_directory(file, ec)) return input_error(fmt::format("{}: is a folder, not a scene file", file.string()));
+  if (io::is_mesh_extension(file)) {
+    FF_TRY(Scene s, mesh_scene(file));
+    s.file = file;
+    return s;
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) return input_error(fmt::format("{}: cannot read the scene file", file.string()));
   std::stringstream ss;
   ss << in.rdbuf();
   const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
-  FF_TRY(Scene s, parse_scene(ss.str(), base, file.string()));
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  auto parsed = parse_scene(ss.str(), base, file.string());
+  // A file that is neither: say what was expected, not only where the JSON broke.
+  if (!parsed && ext != ".json" && parsed.error().message.find("invalid JSON") != std::string::npos)
+    return input_error(fmt::format("{}: neither a scene file (JSON) nor a mesh file fluidform reads (OBJ, FBX, glTF/GLB, "
+                                   "PLY, STL, Collada, ...)",
+                                   file.string()));
+  FF_TRY(Scene s, std::move(parsed));
   s.file = file;
   return s;
 }

@@ -413,6 +413,27 @@ TEST(Cli, RunWithOnlyATargetFormsItAndReportsShapeMetrics) {
   EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
 }
 
+// Issue 46 item 6: a mesh in place of the scene file runs the smallest scene around it (the default ~10k count; two
+// frames here), and report.json's scene is that scene; a file that is neither is one line saying what was expected.
+TEST(Cli, AMeshFileRunsAsTheSmallestSceneAroundIt) {
+  const auto dir = test::temp_dir("mesh_as_scene");
+  test::write_obj(dir / "ball.obj", test::sphere_mesh(0.3f, 3));
+  const auto r = run({"run", (dir / "ball.obj").string(), "-o", (dir / "out").string(), "--frames", "2", "--no-mesh"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("is a mesh: running the smallest scene around it"), std::string::npos) << r.err;
+  const auto rep = nlohmann::json::parse(read_file(dir / "out" / "report.json"));
+  ASSERT_EQ(rep["scene"]["targets"].size(), 1u) << rep["scene"].dump();
+  EXPECT_EQ(rep["scene"]["targets"][0]["mesh"], (dir / "ball.obj").string());
+  EXPECT_GT(rep["totals"]["particles"].get<double>(), 5000.0) << rep["totals"].dump();  // the default count
+
+  std::ofstream(dir / "notes.txt") << "hello\n";
+  const auto bad = run({"run", (dir / "notes.txt").string(), "-o", (dir / "out2").string()});
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("neither a scene file (JSON) nor a mesh file"), std::string::npos) << bad.err;
+  EXPECT_EQ(count_lines(bad.err), 1u) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out2"));
+}
+
 // A target in other units (a character exported in centimetres is hundreds of "metres" tall) runs with the defaults:
 // its derived radius is far above any absolute limit a hand-written scene would need, and one line suggests the scale.
 TEST(Cli, ATargetHundredsOfMetresTallRunsAndSuggestsTheUnitScale) {

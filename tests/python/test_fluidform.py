@@ -259,6 +259,18 @@ def test_run_summary_and_outputs(tmp_path):
     assert s["device"] == "cpu"
 
 
+def test_run_takes_a_mesh_file_as_the_smallest_scene_around_it(tmp_path):
+    # As the CLI: a mesh path in place of a scene (issue 46 item 6).
+    v, f = cube(0.4)
+    obj = tmp_path / "box.obj"
+    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a+1} {b+1} {c+1}\n" for a, b, c in f))
+    s = ff.run(str(obj), out=str(tmp_path / "o"), frames=2, mesh=False)
+    assert s["frames"] == 3 and s["particles"] > 5000
+    (tmp_path / "notes.txt").write_text("hello\n")
+    with pytest.raises(Exception, match="neither a scene file"):
+        ff.run(str(tmp_path / "notes.txt"), out=str(tmp_path / "bad"), frames=1, mesh=False)
+
+
 def test_run_on_the_gpu_device(tmp_path):
     # Vulkan compute on the machine's device (lavapipe where there is no GPU; scripts/setup installs it).
     s = ff.run(small_scene(), out=str(tmp_path / "g"), frames=5, mesh=False, device="gpu")

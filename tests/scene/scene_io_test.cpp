@@ -107,3 +107,58 @@ TEST(SceneReader, FieldListErrors) {
 
 }  // namespace
 }  // namespace ff::scene
+
+namespace ff::scene {
+namespace {
+
+// Issue 46 item 6: `fluidform run bunny.obj` runs the smallest scene around the mesh instead of failing on its JSON.
+TEST(SceneFiles, AMeshFileIsTheSmallestSceneAroundIt) {
+  auto s = load_scene(test::data_dir() / "tetra.obj");
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->targets.size(), 1u);
+  EXPECT_EQ(s->targets[0].mesh, std::filesystem::absolute(test::data_dir() / "tetra.obj").lexically_normal());
+  EXPECT_FALSE(s->targets[0].animation.active());
+  EXPECT_TRUE(s->auto_fluid && s->auto_radius && s->auto_domain && s->auto_resolution);
+  // The same mesh as PLY and STL (the extension is what decides, case-insensitively).
+  for (const char* name : {"tetra.ply", "tetra.stl", "tetra.off"}) {
+    auto t = load_scene(test::data_dir() / name);
+    ASSERT_TRUE(t) << name << ": " << t.error().message;
+    EXPECT_EQ(t->targets.size(), 1u) << name;
+  }
+  const auto dir = test::temp_dir("mesh_scene");
+  std::filesystem::copy_file(test::data_dir() / "tetra.obj", dir / "TETRA.OBJ");
+  EXPECT_TRUE(load_scene(dir / "TETRA.OBJ")) << "upper-case extension";
+}
+
+TEST(SceneFiles, ASkinnedMeshFilePlaysItsFirstClip) {
+  const std::filesystem::path x = "/usr/share/assimp/models/X/anim_test.x";  // Debian's assimp-testmodels
+  ASSERT_TRUE(std::filesystem::exists(x)) << "install assimp-testmodels";
+  auto s = load_scene(x);
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_EQ(s->targets.size(), 1u);
+  EXPECT_EQ(s->targets[0].animation.clip, "0");
+}
+
+TEST(SceneFiles, AFileThatIsNeitherSaysWhatWasExpected) {
+  const auto dir = test::temp_dir("neither");
+  std::ofstream(dir / "notes.md") << "# not a scene\n";
+  auto r = load_scene(dir / "notes.md");
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("neither a scene file (JSON) nor a mesh file"), std::string::npos) << r.error().message;
+  EXPECT_EQ(r.error().message.find('\n'), std::string::npos);
+  // A .json file keeps the parser's own message (where it broke), and a broken mesh names itself.
+  std::ofstream(dir / "scene.json") << "{\"fluid\": [";
+  auto j = load_scene(dir / "scene.json");
+  ASSERT_FALSE(j);
+  EXPECT_NE(j.error().message.find("invalid JSON"), std::string::npos) << j.error().message;
+  auto e = load_scene(test::data_dir() / "empty.obj");
+  ASSERT_FALSE(e);
+  EXPECT_NE(e.error().message.find("empty.obj"), std::string::npos) << e.error().message;
+  // A scene under another name still reads as a scene.
+  std::ofstream(dir / "my.scene") << R"({"fluid":[{"shape":"box","min":[0,0,0],"max":[0.5,0.5,0.5]}]})";
+  auto m = load_scene(dir / "my.scene");
+  EXPECT_TRUE(m) << m.error().message;
+}
+
+}  // namespace
+}  // namespace ff::scene
