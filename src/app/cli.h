@@ -29,6 +29,7 @@ Command add_compare(CLI::App& app);
 Command add_serve(CLI::App& app);
 Command add_keys(CLI::App& app);
 Command add_devices(CLI::App& app);
+Command add_report(CLI::App& app);
 /// No sub-command: the bundled default scene into ./fluidform-out.
 int run_default_scene();
 

@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "only warnings and errors");
   app.fallthrough();  // global flags such as -q also work after the subcommand
   const std::vector<Command> commands{add_run(app), add_sample(app), add_mesh(app), add_compare(app), add_serve(app),
-                                      add_keys(app), add_devices(app)};
+                                      add_keys(app), add_devices(app), add_report(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

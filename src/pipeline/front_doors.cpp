@@ -130,6 +130,7 @@ Result<RunRecording> open_run(const fs::path& out) {
   RunRecording r;
   FF_TRY(r.frames, io::particle_frames(out));
   r.animation = fs::is_regular_file(out / "animation.glb");
+  r.report = fs::is_regular_file(out / "report.html");
   std::ifstream rep(out / "report.json");
   if (rep) {
     const json j = json::parse(rep, nullptr, false);

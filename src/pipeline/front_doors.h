@@ -86,6 +86,7 @@ struct RunRecording {
   std::vector<double> error_rate, step_seconds;
   double fps = 60.0;
   bool animation = false;  ///< the folder has animation.glb
+  bool report = false;     ///< the folder has report.html
 };
 Result<RunRecording> open_run(const std::filesystem::path& run_dir);
 

@@ -1,4 +1,5 @@
 #include "pipeline/run.h"
+#include "pipeline/report_page.h"
 
 #include "pipeline/stepper.h"
 #include "pose/skin_eval.h"
@@ -592,6 +593,8 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, sum, progress));
   if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
     FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, sum));
+  FF_TRY(const ReportPage page, write_report_page(out));
+  spdlog::info("{}", page.describe(out));
   return sum;
 }
 

@@ -311,7 +311,8 @@ json playback_hello(const Recording& r, bool paused) {
   return {{"type", "hello"},     {"mode", "playback"}, {"fps", r.fps},          {"frames", r.frames.size()},
           {"controller", nullptr}, {"controllers", json::array()}, {"meshes", json::array()},
           {"targets", json::array()}, {"paused", paused},
-          {"animation", r.animation ? json("/run/animation.glb") : json(nullptr)}};
+          {"animation", r.animation ? json("/run/animation.glb") : json(nullptr)},
+          {"report", r.report ? json("/run/report.html") : json(nullptr)}};
 }
 
 void playback_loop(const Recording& rec, Shared& sh, const ServeOptions& opt) {
@@ -360,7 +361,7 @@ Status open_input(const ServeOptions& opt, core::Progress& progress, Shared& sh,
   std::error_code ec;
   if (fs::is_directory(opt.input, ec)) {
     FF_TRY(rec, pipeline::open_run(opt.input));
-    if (rec->animation) mounts.push_back({"/run/", opt.input});
+    if (rec->animation || rec->report) mounts.push_back({"/run/", opt.input});
     spdlog::info("serve: playing back {} frames of {}{}", rec->frames.size(), opt.input.string(),
                  rec->animation ? " and its animation.glb" : "");
     sh.set_hello(playback_hello(*rec, false));

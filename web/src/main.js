@@ -238,6 +238,9 @@ function onHello(h) {
   }
   state.hello = h;
   seek.setup(h);
+  // A finished run's report page (report.html in its folder), one click from its playback.
+  $('lnk-report').hidden = !h.report;
+  if (h.report) $('lnk-report').href = h.report;
   hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
   if (h.radius) {

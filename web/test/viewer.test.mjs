@@ -23,7 +23,8 @@
 //   - Ctrl-C (SIGINT) stops the server with exit code 0 and frees its port
 //   - live frames keep the particles' order (sent in particle-id order): at most 0.5 % of sampled particles jump more
 //     than a tenth of the fluid's size between the two frames of a pair; a seek in live mode gets an error
-//   - playback of a finished run (--playback OUT): frames, interpolated, and the mesh animation (animation.glb) play;
+//   - playback of a finished run (--playback OUT): frames, interpolated, and the mesh animation (animation.glb) play,
+//     and the panel links the run's report page (report.html, served from the run's folder);
 //     the seek slider (max: the hello's frame count − 1) follows the frame played, and seeking from it (back, then far
 //     forward) brings that frame and the ones after it, drawn as they are (not interpolated across the jump), with
 //     the mesh animation at the frame's time
@@ -956,6 +957,11 @@ try {
       const ok = await waitFor(page, () => window.__ff?.animation?.loaded && window.__ff.framesReceived >= 30, null,
                                60_000, 'playback: animation.glb loaded and 30 frames');
       if (ok) {
+        // The run's report page, linked from the panel and served from the run's folder.
+        const link = await page.$eval('#lnk-report', (e) => ({ hidden: e.hidden, href: e.getAttribute('href') }));
+        const rep = await page.evaluate(async (h) => { const r = await fetch(h); return { status: r.status, text: await r.text() }; }, link.href);
+        check(!link.hidden && link.href === '/run/report.html' && rep.status === 200 && rep.text.includes('id="ff-data"'),
+              `playback: the panel links the run's report page (${link.href}, HTTP ${rep.status})`);
         const a1 = await page.evaluate(() => window.__ff.animation);
         check(a1.clips >= 1 && a1.meshes >= 1 && a1.duration > 0,
               `playback: mesh animation with ${a1.clips} clip(s), ${a1.meshes} mesh(es), ${a1.duration.toFixed(2)} s`);

@@ -1,0 +1,219 @@
+#include "pipeline/report_page.h"
+
+#include "io/atomic_file.h"
+#include "io/csv_table.h"
+#include "io/load_mesh.h"
+#include "io/picture.h"
+#include "scene/scene.h"
+#include "surface/decimate.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ff::pipeline {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// The page (web/report/report.html with the bundle and the styles inlined), in pieces: see cmake/embed_report_page.cmake.
+constexpr std::string_view kPage[] = {
+#include "report_page.inc"
+};
+
+std::string base64(const std::uint8_t* p, std::size_t n) {
+  static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string s;
+  s.reserve((n + 2) / 3 * 4);
+  for (std::size_t i = 0; i < n; i += 3) {
+    const std::uint32_t v = (std::uint32_t(p[i]) << 16) | (i + 1 < n ? std::uint32_t(p[i + 1]) << 8 : 0u) |
+                            (i + 2 < n ? std::uint32_t(p[i + 2]) : 0u);
+    s += kDigits[(v >> 18) & 63];
+    s += kDigits[(v >> 12) & 63];
+    s += i + 1 < n ? kDigits[(v >> 6) & 63] : '=';
+    s += i + 2 < n ? kDigits[v & 63] : '=';
+  }
+  return s;
+}
+
+template <class T>
+std::string base64_of(const std::vector<T>& v) {
+  return base64(reinterpret_cast<const std::uint8_t*>(v.data()), v.size() * sizeof(T));
+}
+
+// A mesh for the page: at most kPageTriangles (decimated when it is a clean mesh, else refused with a reason).
+Result<io::TriangleMesh> page_mesh(const io::TriangleMesh& in, std::string_view what) {
+  if (in.triangles.size() <= kPageTriangles) return in;
+  if (!surface::check_mesh(in).ok_allowing_cavities())
+    return input_error(fmt::format("{} has {} triangles and cannot be decimated for the page", what, in.triangles.size()));
+  surface::DecimateParams p;
+  p.max_triangles = kPageTriangles;
+  return surface::decimate(in, p);
+}
+
+// Positions as float32 and indices as uint32 (little-endian, as the page's typed arrays read them), base64.
+json mesh_json(const io::TriangleMesh& m) {
+  std::vector<float> pos;
+  pos.reserve(3 * m.vertices.size());
+  for (const Vec3f& v : m.vertices) pos.insert(pos.end(), {v.x(), v.y(), v.z()});
+  std::vector<std::uint32_t> idx;
+  idx.reserve(3 * m.triangles.size());
+  for (const auto& t : m.triangles) idx.insert(idx.end(), {t[0], t[1], t[2]});
+  return json{{"positions", base64_of(pos)}, {"indices", base64_of(idx)}, {"triangles", m.triangles.size()}};
+}
+
+void append_mesh(io::TriangleMesh& to, const io::TriangleMesh& m) {
+  const auto off = static_cast<Index>(to.vertices.size());
+  to.vertices.insert(to.vertices.end(), m.vertices.begin(), m.vertices.end());
+  for (const auto& t : m.triangles) to.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
+}
+
+// The still pictures (io/picture.h, as the tests draw them): the target(s) and the formed shape from one view at one
+// scale, as PNG data URIs.
+json stills(const io::TriangleMesh& targets, const std::optional<io::TriangleMesh>& formed) {
+  io::PictureView view;
+  for (const Vec3f& v : targets.vertices) view.box.extend(v);
+  if (formed)
+    for (const Vec3f& v : formed->vertices) view.box.extend(v);
+  json out = json::array();
+  const auto add = [&](const io::TriangleMesh& m, std::array<std::uint8_t, 3> colour, const char* label) {
+    auto png = io::encode_png(io::render_mesh(m, colour, view));
+    if (png) out.push_back({{"label", label}, {"png", "data:image/png;base64," + base64_of(*png)}});
+  };
+  if (!targets.triangles.empty()) add(targets, {208, 99, 43}, "target");
+  if (formed) add(*formed, {47, 143, 216}, "formed");
+  return out;
+}
+
+// metrics.csv's columns the plots draw, as numbers (null where a field is missing or not a number).
+json metric_columns(const fs::path& out_dir) {
+  const io::CsvTable t = io::read_csv(out_dir / "metrics.csv");
+  json cols = json::object();
+  for (const char* name : {"time_s", "error_rate_pct", "inside_fraction", "splash_fraction", "substeps", "step_time_s"}) {
+    const std::size_t c = t.column(name);
+    json col = json::array();
+    for (const auto& row : t.rows) {
+      const double v = c < row.size() ? std::strtod(row[c].c_str(), nullptr) : NAN;
+      col.push_back(std::isfinite(v) ? json(v) : json(nullptr));
+    }
+    cols[name] = std::move(col);
+  }
+  return cols;
+}
+
+// The lines a reader should not miss: a run that did not finish or form, and walls too thin for the spacing.
+json page_warnings(const json& report) {
+  json w = json::array();
+  if (report.value("status", "ok") != "ok")
+    w.push_back(fmt::format("the run stopped early: {}", report.value("error", report.value("status", "?"))));
+  const json& t = report.value("totals", json::object());
+  if (t.contains("time_to_form_s") && t["time_to_form_s"].is_null())
+    w.push_back("not formed: the fluid never stayed ≥ 99 % inside with ≤ 0.5 % splashed");
+  const json& targets = report.value("targets", json::array());
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    const json& wall = targets[k].value("thinnest_wall", json::object());
+    if (wall.contains("spacings") && wall["spacings"].is_number() && wall["spacings"].get<double>() < 2.999)
+      w.push_back(fmt::format("target {}: walls {:.3g} m thin are {:.1f} spacings across and may come out with holes", k,
+                              wall.value("m", 0.0), wall["spacings"].get<double>()));
+  }
+  return w;
+}
+
+// The targets at their scene transform (the rest pose), from report.json's scene, for the page (`json`) and its
+// picture (`merged`); one that cannot be read is left out with a warning.
+json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) {
+  json out = json::array();
+  if (!report.contains("scene")) return out;
+  auto scene = scene::parse_scene(report["scene"].dump(), "/", "report.json's scene");
+  if (!scene) {
+    warnings.push_back(fmt::format("the targets are not shown: {}", scene.error().message));
+    return out;
+  }
+  for (std::size_t k = 0; k < scene->targets.size(); ++k) {
+    const auto& t = scene->targets[k];
+    auto mesh = io::load_mesh(t.mesh, io::LoadOptions{t.transform});
+    auto m = mesh ? page_mesh(*mesh, fmt::format("target {}", k)) : Result<io::TriangleMesh>(mesh.error());
+    if (!m) {
+      warnings.push_back(fmt::format("target {} is not shown: {}", k, m.error().message));
+      continue;
+    }
+    append_mesh(merged, *m);
+    out.push_back(mesh_json(*m));
+  }
+  return out;
+}
+
+// The final mesh (decimated for the page), when the run made one.
+std::optional<io::TriangleMesh> page_final(const fs::path& out_dir, json& warnings) {
+  const fs::path final = out_dir / "mesh" / "final.obj";
+  if (!fs::is_regular_file(final)) return std::nullopt;
+  auto mesh = io::load_mesh(final);
+  auto m = mesh ? page_mesh(*mesh, "the final mesh") : Result<io::TriangleMesh>(mesh.error());
+  if (!m) {
+    warnings.push_back(fmt::format("the final mesh is not shown: {}", m.error().message));
+    return std::nullopt;
+  }
+  return std::move(*m);
+}
+
+}  // namespace
+
+std::string ReportPage::describe(const fs::path& out_dir) const {
+  return fmt::format("report: {} ({:.1f} MB{}) -> {}", view ? "summary, plots and the 3D view" : "summary and plots",
+                     double(bytes) / 1e6, animation ? ", with the forming's timeline" : "", (out_dir / "report.html").string());
+}
+
+Result<ReportPage> write_report_page(const fs::path& out_dir) {
+  std::ifstream in(out_dir / "report.json");
+  if (!in) return input_error(fmt::format("{}: no report.json (not the output folder of a run)", out_dir.string()));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  json report = json::parse(ss.str(), nullptr, false);
+  if (report.is_discarded() || !report.is_object())
+    return input_error(fmt::format("{}: report.json is not valid JSON", (out_dir / "report.json").string()));
+
+  ReportPage page;
+  json data = {{"report", report}, {"metrics", metric_columns(out_dir)}, {"warnings", page_warnings(report)}};
+  io::TriangleMesh targets;
+  json meshes = {{"final", nullptr}, {"targets", page_targets(report, targets, data["warnings"])}};
+  page.targets = meshes["targets"].size();
+  const std::optional<io::TriangleMesh> final = page_final(out_dir, data["warnings"]);
+  if (final) meshes["final"] = mesh_json(*final), page.view = true;
+  data["stills"] = stills(targets, final);
+  data["meshes"] = std::move(meshes);
+  data["animation"] = nullptr;
+  std::error_code ec;
+  if (const fs::path glb = out_dir / "animation.glb"; fs::is_regular_file(glb, ec)) {
+    if (const auto size = fs::file_size(glb, ec); !ec && size <= kPageAnimationBytes) {
+      std::ifstream g(glb, std::ios::binary);
+      const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+      data["animation"] = base64_of(bytes), page.animation = true;
+    } else if (!ec) {
+      data["animation_note"] = fmt::format("the meshed forming is in animation.glb ({:.1f} MB, more than the {:.0f} MB "
+                                           "this page carries)", double(size) / 1e6, double(kPageAnimationBytes) / (1 << 20));
+    }
+  }
+  // Inside <script>, "</" would end the element: JSON allows "<\/" for it.
+  std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
+  for (std::size_t k = text.find("</"); k != std::string::npos; k = text.find("</", k + 3)) text.replace(k, 2, "<\\/");
+  std::string html;
+  for (std::string_view piece : kPage) html += piece;
+  const std::size_t at = html.find("/*FF_DATA*/");
+  if (at == std::string::npos) return io_error("the embedded report page has no data placeholder");
+  html.replace(at, std::string_view("/*FF_DATA*/").size(), text);
+  FF_CHECK(io::write_file_atomic(out_dir / "report.html", html));
+  page.bytes = html.size();
+  return page;
+}
+
+}  // namespace ff::pipeline
