@@ -1,4 +1,5 @@
 #include "pipeline/compare.h"
+#include "pipeline/compare_page.h"
 
 #include "pipeline/stepper.h"
 
@@ -11,6 +12,7 @@
 #include "core/parallel.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
+#include "io/load_mesh.h"
 #include "scene/scene.h"
 #include "metrics/summary.h"
 
@@ -141,7 +143,16 @@ struct RunSetup {
   int frames = 0;
   std::optional<double> max_memory_mib;  // passed on to every run
   std::string device;                    // passed on to every run
+  io::PictureView view;                  // of every formed shape's picture (compare_view of the targets)
 };
+
+// The run's final mesh as OUT/NAME/formed.png, for compare.html (a run without one is shown without a picture).
+void picture_formed(const fs::path& dir, const io::PictureView& view) {
+  if (!fs::is_regular_file(dir / "mesh" / "final.obj")) return;
+  auto mesh = io::load_mesh(dir / "mesh" / "final.obj");
+  const Status st = mesh ? write_still(dir / "formed.png", *mesh, view, false) : Status(mesh.error());
+  if (!st.ok()) spdlog::warn("compare: no picture of {}'s formed shape: {}", dir.filename().string(), st.error().message);
+}
 
 // Runs one controller in its own process into `dir` and reads its row from report.json and metrics.csv.
 Result<CompareRow> run_controller(const RunSetup& setup, const control::ControllerInfo& entry, const fs::path& dir) {
@@ -154,7 +165,7 @@ Result<CompareRow> run_controller(const RunSetup& setup, const control::Controll
   if (ec) return io_error(fmt::format("{}: cannot clear: {}", dir.string(), ec.message()));
   FF_CHECK(io::ensure_writable_dir(dir));
   std::vector<std::string> argv{setup.exe.string(), "-q", "run", setup.scene.string(), "--controller",
-                                      row.controller, "-o", dir.string(), "--no-mesh", "--frames",
+                                      row.controller, "-o", dir.string(), "--no-animation", "--frames",
                                       std::to_string(setup.frames)};
   if (setup.max_memory_mib) argv.insert(argv.end(), {"--max-memory", fmt::format("{}", *setup.max_memory_mib)});
   argv.insert(argv.end(), {"--device", setup.device});
@@ -175,6 +186,7 @@ Result<CompareRow> run_controller(const RunSetup& setup, const control::Controll
     // Drift from when E settled (a baseline that never keeps 99 % inside still has a drift to compare).
     row.retention_pp = retention_pp(read_error_series(dir / "metrics.csv"), row.time_to_settle_s);
   }
+  picture_formed(dir, setup.view);
   // The particle frames (GBs at 250k particles over 300 frames) and checkpoints are not part of the table.
   fs::remove_all(dir / "particles", ec);
   fs::remove_all(dir / "checkpoint", ec);
@@ -217,6 +229,7 @@ Status check_meshes(const scene::Scene& scene) {
 
 Status write_tables(const fs::path& dir, const CompareTable& table) {
   FF_CHECK(io::write_file_atomic(dir / "table.md", table_markdown(table)));
+  FF_CHECK(write_compare_page(dir, table));
   FF_CHECK(io::write_file_atomic(dir / "table.csv", table_csv(table)));
   return io::write_file_atomic(dir / "table.json", table_to_json(table).dump(2) + "\n");
 }
@@ -428,10 +441,16 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
     return input_error(fmt::format("{}: the scene has no targets, so there is no shape to compare controllers on",
                                    o.scene_file.string()));
   FF_CHECK(check_meshes(scene));
+  io::TriangleMesh targets;  // every target at its scene transform, for the pictures
   {
     // The memory one run will need (each controller runs alone), checked as `run` checks it: a scene too large for
     // the machine fails here with one line, not once per controller after the others have run.
     FF_TRY(auto geometry, load_target_meshes(scene));
+    for (const auto& g : geometry) {
+      const auto off = static_cast<Index>(targets.vertices.size());
+      targets.vertices.insert(targets.vertices.end(), g.mesh.vertices.begin(), g.mesh.vertices.end());
+      for (const auto& tri : g.mesh.triangles) targets.triangles.push_back({tri[0] + off, tri[1] + off, tri[2] + off});
+    }
     scene::Scene completed = scene;
     FF_CHECK(complete_scene(completed, geometry));
     FF_TRY(const RunEstimate estimate, check_run_budget(completed, geometry, o.max_memory_mib));
@@ -455,7 +474,8 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   table.threads = core::thread_count();
   table.cpu = cpu_model();
   table.device = o.device;
-  const RunSetup setup{exe, fs::absolute(o.scene_file), frames, o.max_memory_mib, o.device};
+  const RunSetup setup{exe, fs::absolute(o.scene_file), frames, o.max_memory_mib, o.device, compare_view(targets)};
+  FF_CHECK(write_still(o.out_dir / "target.png", targets, setup.view, true));
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const auto& e = *entries[k];
     spdlog::info("compare [{}/{}] {}: {} frames ...", k + 1, entries.size(), e.name, frames);

@@ -1,5 +1,7 @@
 #include "pipeline/report_page.h"
 
+#include "pipeline/compare_page.h"  // base64
+
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 #include "io/load_mesh.h"
@@ -27,24 +29,11 @@ using nlohmann::json;
 namespace {
 
 // The page (web/report/report.html with the bundle and the styles inlined), in pieces: see cmake/embed_report_page.cmake.
-constexpr std::string_view kPage[] = {
+// Plain pointers, not constexpr string_views: measuring 30 000-character literals at compile time runs past clang's
+// constexpr step limit.
+const char* const kPage[] = {
 #include "report_page.inc"
 };
-
-std::string base64(const std::uint8_t* p, std::size_t n) {
-  static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string s;
-  s.reserve((n + 2) / 3 * 4);
-  for (std::size_t i = 0; i < n; i += 3) {
-    const std::uint32_t v = (std::uint32_t(p[i]) << 16) | (i + 1 < n ? std::uint32_t(p[i + 1]) << 8 : 0u) |
-                            (i + 2 < n ? std::uint32_t(p[i + 2]) : 0u);
-    s += kDigits[(v >> 18) & 63];
-    s += kDigits[(v >> 12) & 63];
-    s += i + 1 < n ? kDigits[(v >> 6) & 63] : '=';
-    s += i + 2 < n ? kDigits[v & 63] : '=';
-  }
-  return s;
-}
 
 template <class T>
 std::string base64_of(const std::vector<T>& v) {
@@ -207,7 +196,7 @@ Result<ReportPage> write_report_page(const fs::path& out_dir) {
   std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
   for (std::size_t k = text.find("</"); k != std::string::npos; k = text.find("</", k + 3)) text.replace(k, 2, "<\\/");
   std::string html;
-  for (std::string_view piece : kPage) html += piece;
+  for (const char* piece : kPage) html += piece;
   const std::size_t at = html.find("/*FF_DATA*/");
   if (at == std::string::npos) return io_error("the embedded report page has no data placeholder");
   html.replace(at, std::string_view("/*FF_DATA*/").size(), text);
