@@ -29,8 +29,8 @@ struct Frame {
 Frame camera(const PictureView& v) {
   Frame f;
   f.back = v.direction.normalized();
-  f.right = Vec3f::UnitY().cross(f.back).normalized();
-  if (!f.right.allFinite()) f.right = Vec3f::UnitX();  // looking straight down
+  const Vec3f side = Vec3f::UnitY().cross(f.back);
+  f.right = side.squaredNorm() > 1e-12f ? Vec3f(side.normalized()) : Vec3f::UnitX();  // looking straight up or down
   f.up = f.back.cross(f.right);
   // An empty box (nothing to draw) gets a unit one at the origin.
   const Aabb box = v.box.empty() ? Aabb{Vec3f::Constant(-0.5f), Vec3f::Constant(0.5f)} : v.box;
@@ -62,10 +62,15 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
     const float s = 0.3f + 0.7f * std::abs(n.dot(light)) / len;
     const float area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
     if (std::abs(area) < 1e-12f) continue;
-    const int x0 = std::max(0, int(std::floor(std::min({a.x(), b.x(), c.x()})))),
-              x1 = std::min(W - 1, int(std::ceil(std::max({a.x(), b.x(), c.x()})))),
-              y0 = std::max(0, int(std::floor(std::min({a.y(), b.y(), c.y()})))),
-              y1 = std::min(H - 1, int(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+    // Clamped in float first: a vertex far outside the view (splashed liquid drawn in the target's view) or not
+    // finite must not overflow the conversion to int.
+    const auto px_lo = [](float v, int size) { return int(std::floor(std::clamp(v, -1.0f, float(size)))); };
+    const auto px_hi = [](float v, int size) { return int(std::ceil(std::clamp(v, -1.0f, float(size)))); };
+    if (!(a.allFinite() && b.allFinite() && c.allFinite())) continue;
+    const int x0 = std::max(0, px_lo(std::min({a.x(), b.x(), c.x()}), W)),
+              x1 = std::min(W - 1, px_hi(std::max({a.x(), b.x(), c.x()}), W)),
+              y0 = std::max(0, px_lo(std::min({a.y(), b.y(), c.y()}), H)),
+              y1 = std::min(H - 1, px_hi(std::max({a.y(), b.y(), c.y()}), H));
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const float px = float(x) + 0.5f, py = float(y) + 0.5f;

@@ -92,8 +92,10 @@ json metric_columns(const fs::path& out_dir) {
     const std::size_t c = t.column(name);
     json col = json::array();
     for (const auto& row : t.rows) {
-      const double v = c < row.size() ? std::strtod(row[c].c_str(), nullptr) : NAN;
-      col.push_back(std::isfinite(v) ? json(v) : json(nullptr));
+      char* end = nullptr;
+      const double v = c < row.size() ? std::strtod(row[c].c_str(), &end) : NAN;
+      const bool whole = c < row.size() && !row[c].empty() && end == row[c].c_str() + row[c].size();
+      col.push_back(whole && std::isfinite(v) ? json(v) : json(nullptr));
     }
     cols[name] = std::move(col);
   }
@@ -131,13 +133,17 @@ json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) 
   for (std::size_t k = 0; k < scene->targets.size(); ++k) {
     const auto& t = scene->targets[k];
     auto mesh = io::load_mesh(t.mesh, io::LoadOptions{t.transform});
-    auto m = mesh ? page_mesh(*mesh, fmt::format("target {}", k)) : Result<io::TriangleMesh>(mesh.error());
-    if (!m) {
-      warnings.push_back(fmt::format("target {} is not shown: {}", k, m.error().message));
+    if (!mesh) {
+      warnings.push_back(fmt::format("target {} is not shown: {}", k, mesh.error().message));
       continue;
     }
-    append_mesh(merged, *m);
-    out.push_back(mesh_json(*m));
+    append_mesh(merged, *mesh);  // the still picture takes any mesh, the 3D view at most kPageTriangles
+    auto m = page_mesh(*mesh, fmt::format("target {}", k));
+    if (m) out.push_back(mesh_json(*m));
+    else warnings.push_back(fmt::format("target {} is not in the 3D view: {}", k, m.error().message));
+    if (!t.keyframes.empty() || !t.swaps.empty() || t.animation.active())
+      warnings.push_back(fmt::format("target {} moves: it is shown at its scene transform (rest pose), the formed shape "
+                                     "at the end of the run", k));
   }
   return out;
 }
@@ -192,9 +198,10 @@ Result<ReportPage> write_report_page(const fs::path& out_dir) {
                                            "this page carries)", double(size) / 1e6, double(kPageAnimationBytes) / (1 << 20));
     }
   }
-  // Inside <script>, "</" would end the element: JSON allows "<\/" for it.
+  // Inside <script>, "</script" ends the element and "<!--" changes how it is read: every '<' (only ever inside a JSON
+  // string) is written as its escape.
   std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
-  for (std::size_t k = text.find("</"); k != std::string::npos; k = text.find("</", k + 3)) text.replace(k, 2, "<\\/");
+  for (std::size_t k = text.find('<'); k != std::string::npos; k = text.find('<', k + 6)) text.replace(k, 1, "\\u003c");
   std::string html;
   for (const char* piece : kPage) html += piece;
   const std::size_t at = html.find("/*FF_DATA*/");

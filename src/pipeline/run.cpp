@@ -317,6 +317,13 @@ struct FrameLoop {
   bool run_until_formed = false;
 };
 
+/// OUT/report.html from what the folder holds; a page that cannot be made is a warning, never a failed run.
+void write_page(const fs::path& out) {
+  const auto page = write_report_page(out);
+  if (page) spdlog::info("{}", page->describe(out));
+  else spdlog::warn("report.html not written: {}", page.error().message);
+}
+
 /// Simulates frames st.next_frame … loop.frames (or until the shape has formed and held), writing each particle
 /// frame, its metrics row and the checkpoints; returns the last frame simulated.
 Result<int> simulate_frames(const FrameLoop& loop, RunState& st, FrameStepper& stepper, core::Progress& progress) {
@@ -335,6 +342,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, FrameStepper& s
       progress.end();
       const std::string msg = fmt::format("frame {}: {}", f, stats.error().message);
       (void)write_report(loop.out, loop.facts, st, "failed", msg);
+      write_page(loop.out);  // the page of a failed run says so, with its frames so far
       return Error{stats.error().kind, msg};
     }
     if (stats->substeps_capped && !warned_cap) {
@@ -476,6 +484,9 @@ Status prepare_out_dir(const fs::path& out, const scene::Scene& scene, const Run
     std::error_code ec;
     fs::remove(checkpoint_file(out), ec);
     fs::remove(previous_checkpoint_file(out), ec);
+    // Nor its meshes and page this run's (a --no-mesh run, a failed one) would show as its own: report.html reads
+    // what the folder holds.
+    for (const char* old : {"report.html", "mesh/final.obj", "animation.glb", "rigged.glb"}) fs::remove(out / old, ec);
   }
   FF_CHECK(io::ensure_writable_dir(out / "particles"));
   if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(out / "checkpoint"));
@@ -593,8 +604,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, sum, progress));
   if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
     FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, sum));
-  FF_TRY(const ReportPage page, write_report_page(out));
-  spdlog::info("{}", page.describe(out));
+  write_page(out);
   return sum;
 }
 

@@ -171,25 +171,34 @@ Result<Scene> load_scene(const fs::path& file) {
   std::error_code ec;
   if (!fs::exists(file, ec)) return input_error(fmt::format("{}: no such scene file", file.string()));
   if (fs::is_directory(file, ec)) return input_error(fmt::format("{}: is a folder, not a scene file", file.string()));
-  if (io::is_mesh_extension(file)) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return input_error(fmt::format("{}: cannot read the scene file", file.string()));
+  // A scene is a JSON object: a file that starts with '{' is one whatever its name (Assimp also claims .xml, .scn and
+  // other names a scene might have); else a mesh file by its extension is the smallest scene around it. Only the
+  // file's head is read to decide (a mesh may be hundreds of MB).
+  std::string text(4096, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const bool object = first != std::string::npos && (text[first] == '{' || text.compare(first, 2, "//") == 0 ||
+                                                    text.compare(first, 2, "/*") == 0);  // comments are allowed
+  if (!object && io::is_mesh_extension(file)) {
     FF_TRY(Scene s, mesh_scene(file));
     s.file = file;
     return s;
   }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return input_error(fmt::format("{}: cannot read the scene file", file.string()));
   std::stringstream ss;
   ss << in.rdbuf();
-  const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  text += ss.str();
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  auto parsed = parse_scene(ss.str(), base, file.string());
-  // A file that is neither: say what was expected, not only where the JSON broke.
-  if (!parsed && ext != ".json" && parsed.error().message.find("invalid JSON") != std::string::npos)
+  // A file that is neither: say what was expected, not where a parser broke on something that was never JSON.
+  if (!object && ext != ".json")
     return input_error(fmt::format("{}: neither a scene file (JSON) nor a mesh file fluidform reads (OBJ, FBX, glTF/GLB, "
                                    "PLY, STL, Collada, ...)",
                                    file.string()));
-  FF_TRY(Scene s, std::move(parsed));
+  const fs::path base = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  FF_TRY(Scene s, parse_scene(text, base, file.string()));
   s.file = file;
   return s;
 }

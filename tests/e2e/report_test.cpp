@@ -92,13 +92,16 @@ TEST(Report, EveryRunWritesASelfContainedPageAndReportWritesItAgain) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("no report.json"), std::string::npos) << bad.err;
 
-  // --no-mesh: the summary and the plots, no mesh.
-  const fs::path bare = small_run(dir, "bare", false);
+  // --no-mesh into the same folder: the summary and the plots, and none of the earlier run's meshes shown as its own.
+  const fs::path bare = small_run(dir, "run", false);
+  EXPECT_FALSE(fs::exists(bare / "mesh" / "final.obj"));
+  EXPECT_FALSE(fs::exists(bare / "animation.glb"));
   const json bare_data = page_data(e2e::read_file(bare / "report.html"));
   ASSERT_TRUE(bare_data.is_object());
   EXPECT_TRUE(bare_data["meshes"]["final"].is_null());
   EXPECT_EQ(bare_data["metrics"]["time_s"].size(), 41u);
   EXPECT_EQ(bare_data["stills"].size(), 1u) << "the target alone";
+  EXPECT_TRUE(bare_data["animation"].is_null());
   fs::remove_all(dir);
 }
 

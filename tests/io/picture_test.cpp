@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace ff::io {
 namespace {
@@ -85,6 +86,24 @@ TEST(Picture, TheNearerShapeHidesTheOther) {
   // Whichever order the triangles come in.
   const Picture front2 = render_mesh(merged(square(0.2f, 0.3f, 0.8f), square(0.4f, 0.0f, 0.0f)), kBlue, v);
   EXPECT_EQ(front2.rgb, front.rgb);
+}
+
+// Looking straight down (the view's "up" is then not Y) and a triangle reaching far outside the view (liquid splashed
+// far from a small target) or to a non-finite point: a picture, not a blank or a crash.
+TEST(Picture, StraightDownAndFarOutsideTheView) {
+  PictureView v = view_of(0.5f);
+  v.direction = Vec3f(0, 1, 0);
+  EXPECT_GT(render_mesh(test::uv_sphere(0.4f, 32), kBlue, v).covered(v.background), 10000u);
+  v.direction = Vec3f(0, -1, 0);
+  EXPECT_GT(render_mesh(test::uv_sphere(0.4f, 32), kBlue, v).covered(v.background), 10000u);
+  TriangleMesh far = test::uv_sphere(0.3f, 16);
+  far.vertices.push_back(Vec3f(1e30f, 0, 0)), far.vertices.push_back(Vec3f(0, -1e30f, 0));
+  far.vertices.push_back(Vec3f(std::numeric_limits<float>::infinity(), 0, 0));
+  const auto k = static_cast<Index>(far.vertices.size());
+  far.triangles.push_back({0, k - 3, k - 2});
+  far.triangles.push_back({0, 1, k - 1});
+  // The ball (radius 0.3 m: a disc of ~49 pixels radius, ~7 500 pixels) is drawn whatever the far triangles do.
+  EXPECT_GT(render_mesh(far, kBlue, view_of(0.5f)).covered(v.background), 7000u);
 }
 
 TEST(Picture, PngBytesReadBackToTheSamePixels) {

@@ -154,10 +154,18 @@ TEST(SceneFiles, AFileThatIsNeitherSaysWhatWasExpected) {
   auto e = load_scene(test::data_dir() / "empty.obj");
   ASSERT_FALSE(e);
   EXPECT_NE(e.error().message.find("empty.obj"), std::string::npos) << e.error().message;
-  // A scene under another name still reads as a scene.
-  std::ofstream(dir / "my.scene") << R"({"fluid":[{"shape":"box","min":[0,0,0],"max":[0.5,0.5,0.5]}]})";
-  auto m = load_scene(dir / "my.scene");
-  EXPECT_TRUE(m) << m.error().message;
+  // A scene under another name still reads as a scene: no extension, upper case, and a name Assimp claims (.xml).
+  for (const char* name : {"my.scene", "myscene", "SCENE.JSON", "scene.xml"}) {
+    std::ofstream(dir / name) << R"(  // a comment first
+      {"fluid":[{"shape":"box","min":[0,0,0],"max":[0.5,0.5,0.5]}]})";
+    auto m = load_scene(dir / name);
+    EXPECT_TRUE(m) << name << ": " << (m ? "" : m.error().message);
+  }
+  // A broken scene under any name keeps the parser's message (where it broke).
+  std::ofstream(dir / "broken") << "{\"fluid\": [";
+  auto b = load_scene(dir / "broken");
+  ASSERT_FALSE(b);
+  EXPECT_NE(b.error().message.find("invalid JSON"), std::string::npos) << b.error().message;
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ import uPlot from 'uplot';
 const data = JSON.parse(document.getElementById('ff-data').textContent);
 const $ = (id) => document.getElementById(id);
 const fmt = (v, digits = 3) => (v === null || v === undefined || Number.isNaN(v) ? '–' : typeof v === 'number' ? Number(v.toPrecision(digits)).toLocaleString('en') : String(v));
+const count = (v) => (typeof v === 'number' ? Math.round(v).toLocaleString('en') : '–');
 const pct = (f, digits = 2) => (f === null || f === undefined ? '–' : `${(100 * f).toFixed(digits)} %`);
 
 function bytes(b64, Type) {
@@ -23,19 +24,19 @@ function bytes(b64, Type) {
 function summaryRows() {
   const r = data.report, t = r.totals ?? {};
   const targets = (r.targets ?? []).map((x) => x.mesh.split('/').pop()).join(', ') || '–';
-  const formed = t.time_to_form_s === null || t.time_to_form_s === undefined ? 'not formed' : `${fmt(t.time_to_form_s)} s`;
+  const formed = !(r.targets ?? []).length ? '– (no target)' : t.time_to_form_s === null || t.time_to_form_s === undefined ? 'not formed' : `${fmt(t.time_to_form_s)} s`;
   return [
     ['status', r.status ?? '–'],
     ['target(s)', targets],
-    ['fluid particles', fmt(t.particles, 6)],
-    ['control particles', fmt(t.control_particles, 6)],
+    ['fluid particles', count(t.particles)],
+    ['control particles', count(t.control_particles)],
     ['device', r.device ?? 'cpu'],
     ['controller', t.controller ?? '–'],
     ['error rate E', t.error_rate_pct === undefined ? '–' : `${fmt(t.error_rate_pct)} % (${fmt(t.error_spacings)} spacings)`],
     ['inside the target', pct(t.inside_fraction)],
     ['splash', pct(t.splash_fraction)],
     ['time to form', formed],
-    ['frames', `${fmt(t.frames, 6)} (${fmt(t.simulated_seconds)} s simulated)`],
+    ['frames', `${count(t.frames)} (${fmt(t.simulated_seconds)} s simulated)`],
     ['per-frame time', t.mean_step_time_s === undefined ? '–' : `${fmt(1000 * t.mean_step_time_s)} ms`],
     ['peak memory', t.peak_memory_mb === undefined ? '–' : `${fmt(t.peak_memory_mb)} MiB`],
     ['fluidform', r.fluidform_version ?? '–'],
@@ -56,7 +57,7 @@ function summary() {
   if (per.length > 1 || (data.report.targets ?? []).length > 1) {
     const names = (data.report.targets ?? []).map((x) => x.mesh.split('/').pop());
     table($('per-target'), ['target', 'fluid', 'E (%)', 'inside', 'splash', 'time to form'],
-          per.map((p) => [names[p.target] ?? p.target, fmt(p.fluid, 6), fmt(p.error_rate_pct), pct(p.inside_fraction), pct(p.splash_fraction),
+          per.map((p) => [names[p.target] ?? p.target, count(p.fluid), fmt(p.error_rate_pct), pct(p.inside_fraction), pct(p.splash_fraction),
                            p.time_to_form_s === null ? 'not formed' : `${fmt(p.time_to_form_s)} s`]));
   }
   // Still pictures of target and formed shape (drawn by fluidform, io/picture.h, from one view at one scale).
@@ -94,8 +95,9 @@ function plots() {
     $('plots').append('The run has fewer than two frames: nothing to plot.');
     return;
   }
-  const per100 = (a) => a.map((v) => 100 * v);
-  const ms = (a) => a.map((v) => 1000 * v);
+  // null (a frame without the value: no target to be inside of) stays a gap in the curve, not a zero.
+  const per100 = (a) => a.map((v) => (v === null ? null : 100 * v));
+  const ms = (a) => a.map((v) => (v === null ? null : 1000 * v));
   plot($('plot-error'), 'error rate E', [['E (%)', m.error_rate_pct]], '%');
   plot($('plot-inside'), 'fluid inside and splashed', [['inside (%)', per100(m.inside_fraction)], ['splash (%)', per100(m.splash_fraction)]], '%');
   plot($('plot-substeps'), 'sub-steps per frame', [['sub-steps', m.substeps]], 'sub-steps');
@@ -115,7 +117,9 @@ async function view() {
   const host = $('view');
   const final = data.meshes?.final, targets = data.meshes?.targets ?? [];
   if (!final && !data.animation) {
-    host.textContent = 'No mesh: the run was made with --no-mesh.';
+    host.textContent = (data.warnings ?? []).some((w) => w.startsWith('the final mesh is not shown'))
+      ? 'No 3D view: the final mesh could not be shown (see above).'
+      : 'No mesh: the run was made with --no-mesh, or stopped before meshing.';
     host.classList.add('empty');
     return;
   }
