@@ -168,7 +168,7 @@ std::string ReportPage::describe(const fs::path& out_dir) const {
                      double(bytes) / 1e6, animation ? ", with the forming's timeline" : "", (out_dir / "report.html").string());
 }
 
-Result<ReportPage> write_report_page(const fs::path& out_dir) {
+Result<ReportPage> write_report_page(const fs::path& out_dir, const PageSources& sources) {
   std::ifstream in(out_dir / "report.json");
   if (!in) return input_error(fmt::format("{}: no report.json (not the output folder of a run)", out_dir.string()));
   std::stringstream ss;
@@ -182,13 +182,14 @@ Result<ReportPage> write_report_page(const fs::path& out_dir) {
   io::TriangleMesh targets;
   json meshes = {{"final", nullptr}, {"targets", page_targets(report, targets, data["warnings"])}};
   page.targets = meshes["targets"].size();
-  const std::optional<io::TriangleMesh> final = page_final(out_dir, data["warnings"]);
+  const std::optional<io::TriangleMesh> final =
+      sources.final_mesh ? page_final(out_dir, data["warnings"]) : std::optional<io::TriangleMesh>();
   if (final) meshes["final"] = mesh_json(*final), page.view = true;
   data["stills"] = stills(targets, final);
   data["meshes"] = std::move(meshes);
   data["animation"] = nullptr;
   std::error_code ec;
-  if (const fs::path glb = out_dir / "animation.glb"; fs::is_regular_file(glb, ec)) {
+  if (const fs::path glb = out_dir / "animation.glb"; sources.animation && fs::is_regular_file(glb, ec)) {
     if (const auto size = fs::file_size(glb, ec); !ec && size <= kPageAnimationBytes) {
       std::ifstream g(glb, std::ios::binary);
       const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());

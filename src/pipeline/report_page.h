@@ -26,9 +26,17 @@ struct ReportPage {
   std::string describe(const std::filesystem::path& out_dir) const;
 };
 
+/// Which of the folder's meshes are the run's own: a run says what it made this time (a --no-mesh run into a used
+/// folder leaves an earlier run's final.obj there, which its page must not show); `fluidform report` takes the folder
+/// as it is.
+struct PageSources {
+  bool final_mesh = true;  ///< mesh/final.obj
+  bool animation = true;   ///< animation.glb
+};
+
 /// Writes `out_dir`/report.html (atomically) from what a run left there: report.json (required: else an Input error
 /// naming the folder), metrics.csv, mesh/final.obj, animation.glb, and the target meshes report.json's scene names
 /// (a missing one is left out of the view, with a line on the page). `fluidform report OUT` and every run call it.
-Result<ReportPage> write_report_page(const std::filesystem::path& out_dir);
+Result<ReportPage> write_report_page(const std::filesystem::path& out_dir, const PageSources& sources = {});
 
 }  // namespace ff::pipeline

@@ -317,11 +317,12 @@ struct FrameLoop {
   bool run_until_formed = false;
 };
 
-/// OUT/report.html from what the folder holds; a page that cannot be made is a warning, never a failed run.
-void write_page(const fs::path& out) {
-  const auto page = write_report_page(out);
-  if (page) spdlog::info("{}", page->describe(out));
-  else spdlog::warn("report.html not written: {}", page.error().message);
+/// OUT/report.html with the meshes this run made (an earlier run's final.obj or animation.glb in the same folder is
+/// kept, as everything already written is, but never shown as this run's).
+Status write_page(const fs::path& out, const PageSources& made) {
+  FF_TRY(const ReportPage page, write_report_page(out, made));
+  spdlog::info("{}", page.describe(out));
+  return {};
 }
 
 /// Simulates frames st.next_frame … loop.frames (or until the shape has formed and held), writing each particle
@@ -342,7 +343,7 @@ Result<int> simulate_frames(const FrameLoop& loop, RunState& st, FrameStepper& s
       progress.end();
       const std::string msg = fmt::format("frame {}: {}", f, stats.error().message);
       (void)write_report(loop.out, loop.facts, st, "failed", msg);
-      write_page(loop.out);  // the page of a failed run says so, with its frames so far
+      (void)write_page(loop.out, PageSources{false, false});  // a failed run's page says so, with its frames so far
       return Error{stats.error().kind, msg};
     }
     if (stats->substeps_capped && !warned_cap) {
@@ -484,9 +485,6 @@ Status prepare_out_dir(const fs::path& out, const scene::Scene& scene, const Run
     std::error_code ec;
     fs::remove(checkpoint_file(out), ec);
     fs::remove(previous_checkpoint_file(out), ec);
-    // Nor its meshes and page this run's (a --no-mesh run, a failed one) would show as its own: report.html reads
-    // what the folder holds.
-    for (const char* old : {"report.html", "mesh/final.obj", "animation.glb", "rigged.glb"}) fs::remove(out / old, ec);
   }
   FF_CHECK(io::ensure_writable_dir(out / "particles"));
   if (scene.output.checkpoint_every > 0) FF_CHECK(io::ensure_writable_dir(out / "checkpoint"));
@@ -604,7 +602,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, sum, progress));
   if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
     FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, sum));
-  write_page(out);
+  FF_CHECK(write_page(out, PageSources{opt.mesh, opt.mesh && (opt.mesh_every > 0 || opt.animation)}));
   return sum;
 }
 
