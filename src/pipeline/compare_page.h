@@ -7,10 +7,15 @@
 #include "io/picture.h"
 #include "pipeline/compare.h"
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
 namespace ff::pipeline {
+
+/// The pictures' colours: a target in orange, the liquid in the water blue of the 3D views.
+inline constexpr std::array<std::uint8_t, 3> kTargetColour{208, 99, 43}, kLiquidColour{47, 143, 216};
 
 /// The one view of every picture of a compare: the targets' box, widened by a quarter so that what spills shows.
 io::PictureView compare_view(const io::TriangleMesh& targets);

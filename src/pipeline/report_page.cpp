@@ -1,6 +1,6 @@
 #include "pipeline/report_page.h"
 
-#include "pipeline/compare_page.h"  // base64
+#include "pipeline/compare_page.h"  // base64, the pictures' colours
 
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
@@ -79,8 +79,8 @@ json stills(const io::TriangleMesh& targets, const std::optional<io::TriangleMes
     auto png = io::encode_png(io::render_mesh(m, colour, view));
     if (png) out.push_back({{"label", label}, {"png", "data:image/png;base64," + base64_of(*png)}});
   };
-  if (!targets.triangles.empty()) add(targets, {208, 99, 43}, "target");
-  if (formed) add(*formed, {47, 143, 216}, "formed");
+  if (!targets.triangles.empty()) add(targets, kTargetColour, "target");
+  if (formed) add(*formed, kLiquidColour, "formed");
   return out;
 }
 

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -89,6 +90,23 @@ inline void expect_no_temp_files(const fs::path& dir) {
   if (!fs::exists(dir)) return;
   for (const auto& e : fs::recursive_directory_iterator(dir))
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "partial file left: " << e.path();
+}
+
+// Debian's chromium for the browser tests (FF_CHROMIUM overrides), or empty.
+inline fs::path chromium() {
+  if (const char* c = std::getenv("FF_CHROMIUM")) return c;
+  for (const char* c : {"/usr/bin/chromium", "/usr/bin/chromium-browser"})
+    if (fs::exists(c)) return c;
+  return {};
+}
+
+// Why a browser test (node + npm's playwright-core + chromium) cannot run here; empty when it can.
+inline std::string browser_test_missing() {
+  if (test::shell("node --version").first != 0) return "node is not installed (scripts/setup installs it)";
+  if (!fs::exists(test::source_dir() / "node_modules" / "playwright-core" / "package.json"))
+    return "playwright-core is not installed: npm install (scripts/setup runs it)";
+  if (chromium().empty()) return "Debian's chromium is not installed (apt-get install chromium; scripts/test installs it)";
+  return "";
 }
 
 }  // namespace ff::e2e

@@ -9,7 +9,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -96,13 +95,6 @@ TEST_F(Compare, WritesOneRowPerControllerAndAdaptiveBeatsNone) {
   expect_no_temp_files(out);
 }
 
-fs::path chromium() {
-  if (const char* c = std::getenv("FF_CHROMIUM")) return c;
-  for (const char* c : {"/usr/bin/chromium", "/usr/bin/chromium-browser"})
-    if (fs::exists(c)) return c;
-  return {};
-}
-
 // compare.html (issue 46 item 2): the table with a picture of each controller's formed shape beside the target's and
 // links to their report.html, sortable; looked at in headless chromium off the network (web/test/compare.test.mjs).
 TEST_F(Compare, ThePageShowsEveryRowWithItsPictureAndSorts) {
@@ -117,11 +109,8 @@ TEST_F(Compare, ThePageShowsEveryRowWithItsPictureAndSorts) {
   }
   EXPECT_TRUE(fs::exists(out / "target.png"));
   EXPECT_EQ(html.find("<script src"), std::string::npos);
-  const fs::path src = test::source_dir(), browser = chromium();
-  if (test::shell("node --version").first != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
-  if (!fs::exists(src / "node_modules" / "playwright-core" / "package.json"))
-    GTEST_SKIP() << "playwright-core is not installed: npm install (scripts/setup runs it)";
-  if (browser.empty()) GTEST_SKIP() << "Debian's chromium is not installed (apt-get install chromium; scripts/test installs it)";
+  if (const std::string why = e2e::browser_test_missing(); !why.empty()) GTEST_SKIP() << why;
+  const fs::path src = test::source_dir(), browser = e2e::chromium();
   const fs::path artifacts = fs::current_path() / "test-artifacts" / "compare";
   const auto [rc, log] = test::shell("node '" + (src / "web" / "test" / "compare.test.mjs").string() + "' --page '" +
                                      (out / "compare.html").string() + "' --rows 2 --chromium '" + browser.string() +

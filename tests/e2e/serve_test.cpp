@@ -21,20 +21,10 @@ namespace fs = std::filesystem;
 
 using test::shell;
 
-fs::path chromium() {
-  if (const char* c = std::getenv("FF_CHROMIUM")) return c;
-  for (const char* c : {"/usr/bin/chromium", "/usr/bin/chromium-browser"})
-    if (fs::exists(c)) return c;
-  return {};
-}
-
 TEST(Serve, ViewerInHeadlessChromium) {
   const fs::path src = test::source_dir();
-  if (shell("node --version").first != 0) GTEST_SKIP() << "node is not installed (scripts/setup installs it)";
-  if (!fs::exists(src / "node_modules" / "playwright-core" / "package.json"))
-    GTEST_SKIP() << "playwright-core is not installed: npm install (scripts/setup runs it)";
-  const fs::path browser = chromium();
-  if (browser.empty()) GTEST_SKIP() << "Debian's chromium is not installed (apt-get install chromium; scripts/test installs it)";
+  if (const std::string why = e2e::browser_test_missing(); !why.empty()) GTEST_SKIP() << why;
+  const fs::path browser = e2e::chromium();
   ASSERT_TRUE(fs::exists(src / "examples" / "bunny.obj")) << "run scripts/setup (it writes examples/bunny.obj)";
 
   const fs::path dir = test::temp_dir("serve");
