@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -21,7 +22,8 @@ namespace ff::io::glb {
 using nlohmann::json;
 
 // glTF enums (WebGL names).
-inline constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120;
+inline constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120,
+                     kUnsignedByte = 5121;
 inline constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
 /// Appends the little-endian bytes of `v`.
@@ -79,12 +81,29 @@ inline Result<std::vector<std::uint8_t>> pack_glb(const json& doc, const std::ve
   return out;
 }
 
+/// Roughness of the opaque, vertex-coloured liquid (appearance tint or target): a wet, glossy surface.
+inline constexpr float kColouredRoughness = 0.3f;
+
+/// COLOR_0 of a mesh: linear RGB as normalized unsigned bytes, VEC4 (4-byte aligned; alpha 255).
+inline int colour_accessor(GlbBuilder& b, const std::vector<Vec3f>& colours) {
+  std::vector<std::uint8_t> c(4 * colours.size(), 255);
+  for (std::size_t i = 0; i < colours.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const float v = colours[i][a];
+      c[4 * i + std::size_t(a)] = static_cast<std::uint8_t>(std::lround(std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) * 255.0f : 0.0f));
+    }
+  return b.accessor(b.view(c.data(), c.size(), kArrayBuffer, 4), kUnsignedByte, colours.size(), "VEC4", nullptr, nullptr, true);
+}
+
 /// The water material (KHR_materials_transmission, _ior, _volume; a closed mesh, so the volume extension's
 /// "thickness" is the mesh's own). Base colour white: the tint comes from absorption along the path through the
 /// liquid, deeper where it is thicker, as in real water.
 /// thicknessFactor is in the mesh's own coordinates, attenuationDistance in the world's: a quantized mesh lives in
 /// [-1, 1]³ under a node scaled by its half-extent, so its thickness is a quarter of that cube's diagonal.
 inline json water_material(const WaterMaterial& w, const Aabb& box, bool quantized, const std::string& name = "water") {
+  if (w.coloured)  // opaque: its vertex colours (COLOR_0) times a white base colour
+    return {{"name", name == "water" ? std::string("liquid") : name},
+            {"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", kColouredRoughness}}}};
   const Vec3f ext = box.max - box.min;
   const float size = ext.allFinite() && ext.minCoeff() >= 0.0f && ext.norm() > 0.0f ? ext.norm() : 1.0f;
   const float distance = w.attenuation_distance > 0.0f ? w.attenuation_distance : 0.5f * size;

@@ -1,5 +1,7 @@
 #include "io/picture.h"
 
+#include "io/target_look.h"
+
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <png.h>
@@ -47,6 +49,9 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
   const int W = view.width * kSuper, H = view.height * kSuper;
   std::vector<float> depth(std::size_t(W) * H, -std::numeric_limits<float>::infinity());
   std::vector<float> shade(std::size_t(W) * H, -1.0f);  // < 0: background
+  // A mesh with vertex colours (the liquid's look) is drawn in them, interpolated in linear light, else in `colour`.
+  const bool coloured = !mesh.colours.empty() && mesh.colours.size() == mesh.vertices.size();
+  std::vector<Vec3f> tone(coloured ? shade.size() : 0);  // per sample: its colour, 0–255 sRGB
   std::vector<Vec3f> p(mesh.vertices.size());          // x, y in supersampled pixels, z towards the eye
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec3f d = mesh.vertices[i] - f.centre;
@@ -79,7 +84,12 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
         if (w0 < 0.0f || w1 < 0.0f || w2 < 0.0f) continue;
         const float z = w0 * a.z() + w1 * b.z() + w2 * c.z();
         const std::size_t k = std::size_t(y) * W + x;
-        if (z > depth[k]) depth[k] = z, shade[k] = s;
+        if (!(z > depth[k])) continue;
+        depth[k] = z, shade[k] = s;
+        if (coloured) {
+          const Vec3f lin = w0 * mesh.colours[t[0]] + w1 * mesh.colours[t[1]] + w2 * mesh.colours[t[2]];
+          tone[k] = Vec3f(linear_to_srgb(lin.x()), linear_to_srgb(lin.y()), linear_to_srgb(lin.z()));
+        }
       }
   }
   // Down to the picture: the mean of each pixel's samples (a background sample counts as the background colour).
@@ -90,8 +100,9 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
         float sum = 0.0f;
         for (int sy = 0; sy < kSuper; ++sy)
           for (int sx = 0; sx < kSuper; ++sx) {
-            const float s = shade[std::size_t(y * kSuper + sy) * W + (x * kSuper + sx)];
-            sum += s < 0.0f ? float(view.background[ch]) : s * float(colour[ch]);
+            const std::size_t k = std::size_t(y * kSuper + sy) * W + (x * kSuper + sx);
+            const float s = shade[k];
+            sum += s < 0.0f ? float(view.background[ch]) : s * (coloured ? tone[k][ch] : float(colour[ch]));
           }
         pic.rgb[(std::size_t(y) * view.width + x) * 3 + ch] =
             static_cast<std::uint8_t>(std::clamp(std::lround(sum / float(kSuper * kSuper)), 0L, 255L));

@@ -30,7 +30,8 @@ struct PictureView {
   std::array<std::uint8_t, 3> background{243, 245, 248};
 };
 
-/// `mesh` drawn in `colour` (shaded by the angle to the view direction, both sides lit) over the background.
+/// `mesh` drawn in `colour`, or in its vertex colours when it has them (shaded by the angle to the view direction, both
+/// sides lit), over the background.
 Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>& colour, const PictureView& view);
 
 /// The picture as PNG bytes (libpng); an Io error when libpng fails.

@@ -10,6 +10,8 @@ namespace ff::io {
 struct TriangleMesh {
   std::vector<Vec3f> vertices;                  ///< metres
   std::vector<std::array<Index, 3>> triangles;  ///< counter-clockwise seen from outside (when the source is)
+  /// Per vertex, linear RGB in [0, 1] (the liquid's look, pipeline/liquid_look.h); empty: the mesh has no colours.
+  std::vector<Vec3f> colours;
 
   Aabb bounds() const {
     Aabb b;
@@ -28,9 +30,11 @@ inline std::vector<Index> drop_unused_vertices(TriangleMesh& mesh) {
   for (std::size_t v = 0; v < map.size(); ++v)
     if (map[v] != kInvalidIndex) {
       map[v] = next;
+      if (!mesh.colours.empty()) mesh.colours[next] = mesh.colours[v];
       mesh.vertices[next++] = mesh.vertices[v];
     }
   mesh.vertices.resize(next);
+  if (!mesh.colours.empty()) mesh.colours.resize(next);
   for (auto& t : mesh.triangles)
     for (Index& v : t) v = map[v];
   return map;

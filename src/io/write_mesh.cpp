@@ -2,6 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/glb_builder.h"
+#include "io/target_look.h"
 
 #include <Eigen/Geometry>  // cross product
 #include <fmt/format.h>
@@ -17,7 +18,7 @@ namespace {
 
 using nlohmann::json;
 // The GLB pieces shared with write_rigged_glb.cpp (io/glb_builder.h).
-using glb::GlbBuilder, glb::put, glb::pack_glb, glb::water_material;
+using glb::GlbBuilder, glb::put, glb::pack_glb, glb::water_material, glb::kColouredRoughness;
 using glb::kFloat, glb::kUnsignedInt, glb::kUnsignedShort, glb::kShort, glb::kByte, glb::kArrayBuffer,
     glb::kElementArrayBuffer;
 
@@ -45,9 +46,12 @@ std::string encode_mtl(const WaterMaterial& m) {
   const Vec3f c = m.tint;
   // illum 7: reflection and refraction (Fresnel); Tf 1 1 1: a clear body (Blender's OBJ importer takes the mean
   // of Tf as the Principled BSDF's transmission, so a tinted Tf would make it half opaque); the tint is Kd.
+  // "liquid": the opaque look of a liquid with vertex colours (appearance tint or target), which multiply Kd.
   return fmt::format("# fluidform water material\nnewmtl water\nKa 0 0 0\nKd {:.4f} {:.4f} {:.4f}\nKs 1 1 1\n"
-                     "Ns {:.1f}\nNi {:.3f}\nd 1\nTf 1 1 1\nillum 7\n",
-                     c.x(), c.y(), c.z(), 1000.0f * (1.0f - m.roughness), m.ior);
+                     "Ns {:.1f}\nNi {:.3f}\nd 1\nTf 1 1 1\nillum 7\n"
+                     "\n# fluidform coloured liquid (its colours are the OBJ's vertex colours)\nnewmtl liquid\nKa 0 0 0\n"
+                     "Kd 1 1 1\nKs 0.5 0.5 0.5\nNs {:.1f}\nd 1\nillum 2\n",
+                     c.x(), c.y(), c.z(), 1000.0f * (1.0f - m.roughness), m.ior, 1000.0f * (1.0f - kColouredRoughness));
 }
 
 std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view comment, std::string_view mtllib) {
@@ -60,10 +64,21 @@ std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view 
   }
   s += fmt::format("# {} vertices, {} triangles; Y up, metres\n", mesh.vertices.size(), mesh.triangles.size());
   // 9 significant digits round-trip a float exactly.
-  for (const auto& v : mesh.vertices) s += fmt::format("v {:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
+  // Vertex colours as `v x y z r g b` (sRGB, as MeshLab, three.js's OBJLoader and Blender ≥ 3.5 read them).
+  const bool coloured = !mesh.colours.empty() && mesh.colours.size() == mesh.vertices.size();
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3f& v = mesh.vertices[i];
+    if (coloured) {
+      const Vec3f& c = mesh.colours[i];
+      s += fmt::format("v {:.9g} {:.9g} {:.9g} {:.4f} {:.4f} {:.4f}\n", v.x(), v.y(), v.z(), linear_to_srgb(c.x()) / 255.0,
+                       linear_to_srgb(c.y()) / 255.0, linear_to_srgb(c.z()) / 255.0);
+    } else {
+      s += fmt::format("v {:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
+    }
+  }
   if (normals)
     for (const auto& n : vertex_normals(mesh)) s += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", n.x(), n.y(), n.z());
-  if (!mtllib.empty()) s += fmt::format("mtllib {}\nusemtl water\n", mtllib);
+  if (!mtllib.empty()) s += fmt::format("mtllib {}\nusemtl {}\n", mtllib, coloured ? "liquid" : "water");
   for (const auto& t : mesh.triangles) {
     if (normals)
       s += fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
@@ -104,6 +119,8 @@ Status GlbOptions::validate(std::size_t frames) const {
 namespace {
 
 Status check_glb_frame(const TriangleMesh& m, std::size_t k) {
+  if (!m.colours.empty() && m.colours.size() != m.vertices.size())
+    return input_error(fmt::format("glb: frame {} has {} vertex colours for {} vertices", k, m.colours.size(), m.vertices.size()));
   for (const auto& t : m.triangles)
     for (Index v : t)
       if (v >= m.vertices.size())
@@ -209,8 +226,15 @@ json glb_materials(const GlbOptions& o, const Aabb& box) {
   if (o.materials.empty()) return json::array({water_material(o.material, box, o.quantize)});
   json all = json::array();
   for (std::size_t k = 0; k < o.materials.size(); ++k)
-    all.push_back(water_material(o.materials[k], box, o.quantize, fmt::format("water_{}", k)));
+    all.push_back(water_material(o.materials[k], box, o.quantize,
+                                 fmt::format("{}_{}", o.materials[k].coloured ? "liquid" : "water", k)));
   return all;
+}
+
+// The water extensions, when a material is water.
+bool any_water(const GlbOptions& o) {
+  if (o.materials.empty()) return !o.material.coloured;
+  return std::any_of(o.materials.begin(), o.materials.end(), [](const WaterMaterial& w) { return !w.coloured; });
 }
 
 }  // namespace
@@ -238,8 +262,9 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
     for (const auto& v : m.vertices) box.extend(v);
     last_box = box;
     json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
-    const json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
-                                       : float_attributes(b, m, normals, box);
+    json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
+                                 : float_attributes(b, m, normals, box);
+    if (!m.colours.empty()) attributes["COLOR_0"] = glb::colour_accessor(b, m.colours);
     json primitives = json::array();
     if (o.triangle_material.empty()) {
       primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, m)}, {"material", 0}, {"mode", 4}});
@@ -285,11 +310,12 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"accessors", b.accessors}};
   if (!meshes.empty()) doc["meshes"] = meshes;
   if (!animation.is_null()) doc["animations"] = json::array({animation});
-  doc["extensionsUsed"] = glb::water_extensions();
+  doc["extensionsUsed"] = any_water(o) ? glb::water_extensions() : json::array();
   if (o.quantize && !meshes.empty()) {
     doc["extensionsUsed"].push_back("KHR_mesh_quantization");
     doc["extensionsRequired"] = {"KHR_mesh_quantization"};
   }
+  if (doc["extensionsUsed"].empty()) doc.erase("extensionsUsed");  // the schema wants at least one, or none
   return pack_glb(doc, b.bin);
 }
 

@@ -30,13 +30,18 @@ struct WaterMaterial {
   float roughness = 0.05f;
   float attenuation_distance = 0.0f;  ///< m travelled inside before light takes the tint; 0: half the last
                                       ///< frame's box diagonal (the tint then looks the same at any model size)
+  /// Not water: an opaque liquid whose colour is the mesh's vertex colours (appearance tint or target; glTF COLOR_0 on
+  /// a white base colour, MTL material "liquid").
+  bool coloured = false;
 };
 
-/// MTL text of one material named "water".
+/// MTL text of two materials: "water" (the clear liquid, Kd the tint) and "liquid" (opaque, white: an OBJ with vertex
+/// colours names it).
 std::string encode_mtl(const WaterMaterial& material);
 
-/// OBJ text: `v` lines, then `vn` (vertex normals, same indexing) when `normals`, then `f a//a b//b c//c`; with
-/// `mtllib` (a file name beside the OBJ), `mtllib` + `usemtl water` before the faces.
+/// OBJ text: `v` lines (`v x y z r g b`, sRGB, when the mesh has colours), then `vn` (vertex normals, same indexing)
+/// when `normals`, then `f a//a b//b c//c`; with `mtllib` (a file name beside the OBJ), `mtllib` + `usemtl water`
+/// (`usemtl liquid` with colours) before the faces.
 std::string encode_obj(const TriangleMesh& mesh, bool normals = true, std::string_view comment = "fluidform mesh",
                        std::string_view mtllib = {});
 Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals = true,

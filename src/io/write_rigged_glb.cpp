@@ -337,8 +337,12 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
   std::vector<std::array<float, kMaxInfluences>> we = weights;
   for (std::size_t i = 0; i < nv; ++i) FF_CHECK(clean_influences(jo[i], we[i], skin.joint_nodes.size(), i));
 
+  const bool coloured = !mesh.colours.empty();
+  if (coloured && mesh.colours.size() != nv)
+    return input_error(fmt::format("rigged glb: {} vertex colours for {} vertices", mesh.colours.size(), nv));
   GlbBuilder b;
-  const json attributes = vertex_attributes(b, f, jo, we);
+  json attributes = vertex_attributes(b, f, jo, we);
+  if (coloured) attributes["COLOR_0"] = glb::colour_accessor(b, mesh.colours);
   const int indices = index_accessor(b, mesh);
   const json nodes = rig_nodes(skin, transform, f.rot);
   const std::size_t mesh_node = nodes.size() - 1;
@@ -347,10 +351,12 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
 
   WaterMaterial water;
   water.tint = tint;
+  water.coloured = coloured;  // a liquid with the target's colours (or its tint) is opaque: its vertex colours
   json material = glb::water_material(water, f.world_box, false);
   // thicknessFactor is in the mesh's own (file) coordinates, attenuationDistance in the world's.
   const Vec3f file_ext = f.file_box.max - f.file_box.min;
-  material["extensions"]["KHR_materials_volume"]["thicknessFactor"] = 0.25f * (file_ext.norm() > 0.0f ? file_ext.norm() : 1.0f);
+  if (!coloured)
+    material["extensions"]["KHR_materials_volume"]["thicknessFactor"] = 0.25f * (file_ext.norm() > 0.0f ? file_ext.norm() : 1.0f);
 
   while (b.bin.size() % 4) b.bin.push_back(0);
   json doc = {{"asset", {{"version", "2.0"}, {"generator", "fluidform"}}},
@@ -364,7 +370,8 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
               {"buffers", {{{"byteLength", b.bin.size()}}}},
               {"bufferViews", b.views},
               {"accessors", b.accessors},
-              {"extensionsUsed", glb::water_extensions()}};
+              {"extensionsUsed", coloured ? json::array() : glb::water_extensions()}};
+  if (coloured) doc.erase("extensionsUsed");
   if (!animations.empty()) doc["animations"] = animations;
   return glb::pack_glb(doc, b.bin);
 }

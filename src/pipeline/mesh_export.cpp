@@ -169,6 +169,13 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
       meshes[c] = std::move(*mesh);
       if (label) labels[c] = triangle_targets(meshes[c], *f, d, o.target_tints.size());
       const long k = io::frame_number(file);
+      if (o.looks != nullptr && o.looks->coloured()) {
+        const std::size_t n = o.looks->targets.size();
+        const std::vector<std::uint8_t> vt =
+            n > 1 ? vertex_targets(meshes[c], f->positions, f->targets, d, n) : std::vector<std::uint8_t>();
+        const double time = double(k >= 0 ? k : static_cast<long>(chosen[c])) / o.fps;
+        meshes[c].colours = liquid_colours(*o.looks, meshes[c], vt, time);
+      }
       if (o.vdb) {
         // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.
         io::VdbOptions v;
@@ -279,15 +286,14 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     io::GlbOptions g;
     g.fps = o.fps;
     g.quantize = o.quantize;
-    if (o.target_tints.size() == 1) g.material.tint = o.target_tints[0];
-    if (o.target_tints.size() > 1) {
-      for (const Vec3f& tint : o.target_tints) {
-        io::WaterMaterial w;
-        w.tint = tint;
-        g.materials.push_back(w);
-      }
-      g.triangle_material = labels;
+    std::vector<io::WaterMaterial> materials;
+    if (o.looks != nullptr && o.looks->targets.size() == o.target_tints.size()) {
+      materials = o.looks->materials();
+    } else {
+      for (const Vec3f& tint : o.target_tints) materials.emplace_back().tint = tint;
     }
+    if (materials.size() == 1) g.material = materials[0];
+    if (materials.size() > 1) g.materials = materials, g.triangle_material = labels;
     for (std::size_t c : chosen) {
       const long k = io::frame_number(frames[c]);
       g.times.push_back(double(k >= 0 ? k : static_cast<long>(c)) / o.fps);

@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "core/types.h"
 #include "surface/surface_params.h"
+#include "pipeline/liquid_look.h"
 
 #include <filesystem>
 #include <span>
@@ -34,6 +35,9 @@ struct MeshOptions {
   /// The water tint of each target (scene targets[].tint). One: the GLB's material takes it. Several: one material
   /// per target, each triangle of a frame getting the material of the target of the particle nearest to it.
   std::vector<Vec3f> target_tints;
+  /// The targets' looks (pipeline/liquid_look.h); when one is not water, every mesh written gets vertex colours and
+  /// the GLB its targets' materials. Null: water, as the tints say. Not owned.
+  const LiquidLooks* looks = nullptr;
   double fps = 60.0;        ///< frame rate of the animation and the cache
   double max_memory_mib = 0.0;  ///< bound on one frame's field grid (surface::reconstruct); 0: 80 % of the machine's
 

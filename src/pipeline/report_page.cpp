@@ -6,6 +6,8 @@
 #include "io/csv_table.h"
 #include "io/load_mesh.h"
 #include "io/picture.h"
+#include "io/target_look.h"
+#include "core/point_tree.h"
 #include "scene/scene.h"
 #include "surface/decimate.h"
 
@@ -13,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -47,10 +50,16 @@ Result<io::TriangleMesh> page_mesh(const io::TriangleMesh& in, std::string_view 
     return input_error(fmt::format("{} has {} triangles and cannot be decimated for the page", what, in.triangles.size()));
   surface::DecimateParams p;
   p.max_triangles = kPageTriangles;
-  return surface::decimate(in, p);
+  io::TriangleMesh out = surface::decimate(in, p);
+  if (!in.colours.empty()) {  // decimation moves vertices: each takes the colour of the nearest vertex it came from
+    const core::PointTree tree(in.vertices);
+    out.colours.resize(out.vertices.size());
+    for (std::size_t v = 0; v < out.vertices.size(); ++v)
+      out.colours[v] = in.colours[tree.original(tree.nearest(out.vertices[v]).slot)];
+  }
+  return out;
 }
 
-// Positions as float32 and indices as uint32 (little-endian, as the page's typed arrays read them), base64.
 json mesh_json(const io::TriangleMesh& m) {
   std::vector<float> pos;
   pos.reserve(3 * m.vertices.size());
@@ -58,11 +67,27 @@ json mesh_json(const io::TriangleMesh& m) {
   std::vector<std::uint32_t> idx;
   idx.reserve(3 * m.triangles.size());
   for (const auto& t : m.triangles) idx.insert(idx.end(), {t[0], t[1], t[2]});
-  return json{{"positions", base64_of(pos)}, {"indices", base64_of(idx)}, {"triangles", m.triangles.size()}};
+  json out{{"positions", base64_of(pos)}, {"indices", base64_of(idx)}, {"triangles", m.triangles.size()}};
+  if (!m.colours.empty()) {  // linear RGB bytes, as three.js takes vertex colours
+    std::vector<std::uint8_t> rgb;
+    rgb.reserve(3 * m.colours.size());
+    for (const Vec3f& c : m.colours)
+      for (int a = 0; a < 3; ++a) rgb.push_back(static_cast<std::uint8_t>(std::lround(std::clamp(c[a], 0.0f, 1.0f) * 255.0f)));
+    out["colours"] = base64_of(rgb);
+  }
+  return out;
 }
 
 void append_mesh(io::TriangleMesh& to, const io::TriangleMesh& m) {
   const auto off = static_cast<Index>(to.vertices.size());
+  // Colours: when either has them, the one without is drawn in the target colour.
+  if (!m.colours.empty() || !to.colours.empty()) {
+    const auto lin = [](std::uint8_t c) { return io::srgb_to_linear(c); };
+    const Vec3f plain(lin(kTargetColour[0]), lin(kTargetColour[1]), lin(kTargetColour[2]));
+    to.colours.resize(to.vertices.size(), plain);
+    if (m.colours.empty()) to.colours.insert(to.colours.end(), m.vertices.size(), plain);
+    else to.colours.insert(to.colours.end(), m.colours.begin(), m.colours.end());
+  }
   to.vertices.insert(to.vertices.end(), m.vertices.begin(), m.vertices.end());
   for (const auto& t : m.triangles) to.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
 }
@@ -137,7 +162,21 @@ json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) 
       warnings.push_back(fmt::format("target {} is not shown: {}", k, mesh.error().message));
       continue;
     }
-    append_mesh(merged, *mesh);  // the still picture takes any mesh, the 3D view at most kPageTriangles
+    // A target whose liquid wears its look is drawn in it (each vertex its colour there) in the still picture.
+    if (t.appearance == scene::Appearance::Target) {
+      if (auto look = io::load_target_look(t.mesh, t.transform)) {
+        io::TriangleMesh painted = look->mesh;
+        painted.colours.assign(painted.vertices.size(), Vec3f::Ones());
+        for (Index f = 0; f < painted.triangles.size(); ++f)
+          for (int c = 0; c < 3; ++c)
+            painted.colours[painted.triangles[f][c]] = look->colour_at(f, Vec3f::Unit(c));
+        append_mesh(merged, painted);
+      } else {
+        append_mesh(merged, *mesh);
+      }
+    } else {
+      append_mesh(merged, *mesh);  // the still picture takes any mesh, the 3D view at most kPageTriangles
+    }
     auto m = page_mesh(*mesh, fmt::format("target {}", k));
     if (m) out.push_back(mesh_json(*m));
     else warnings.push_back(fmt::format("target {} is not in the 3D view: {}", k, m.error().message));
@@ -148,11 +187,31 @@ json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) 
   return out;
 }
 
+// final.obj's vertex colours (`v x y z r g b`, sRGB; a run whose liquid is not water writes them), through Assimp
+// (io/target_look.h reads vertex colours): `mesh` takes them when the two agree vertex for vertex.
+void final_colours(const fs::path& final, io::TriangleMesh& mesh) {
+  std::ifstream in(final);
+  std::string line;
+  bool coloured = false;
+  while (std::getline(in, line) && !coloured) coloured = line == "usemtl liquid";
+  if (!coloured) return;
+  auto look = io::load_target_look(final);
+  if (!look || look->colours.size() != look->mesh.vertices.size() || look->mesh.vertices.size() != mesh.vertices.size()) return;
+  const core::PointTree tree(look->mesh.vertices);
+  mesh.colours.resize(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3f& c = look->colours[tree.original(tree.nearest(mesh.vertices[v]).slot)];
+    const auto lin = [](float s) { return io::srgb_to_linear(static_cast<std::uint8_t>(std::lround(std::clamp(s, 0.0f, 1.0f) * 255.0f))); };
+    mesh.colours[v] = Vec3f(lin(c.x()), lin(c.y()), lin(c.z()));
+  }
+}
+
 // The final mesh (decimated for the page), when the run made one.
 std::optional<io::TriangleMesh> page_final(const fs::path& out_dir, json& warnings) {
   const fs::path final = out_dir / "mesh" / "final.obj";
   if (!fs::is_regular_file(final)) return std::nullopt;
   auto mesh = io::load_mesh(final);
+  if (mesh) final_colours(final, *mesh);
   auto m = mesh ? page_mesh(*mesh, "the final mesh") : Result<io::TriangleMesh>(mesh.error());
   if (!m) {
     warnings.push_back(fmt::format("the final mesh is not shown: {}", m.error().message));

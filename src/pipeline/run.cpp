@@ -416,8 +416,8 @@ RunSummary run_summary(const RunFacts& facts, const RunState& st, int last_frame
 /// The editable mesh of the last frame, the mesh animation and the point cache (every animation_every()-th frame,
 /// or every --mesh-every-th with its OBJs), from the particle frames just written; a failure here leaves the
 /// simulation's outputs as they are.
-Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, const RunOptions& opt, RunSummary& sum,
-                core::Progress& progress) {
+Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, const RunOptions& opt,
+                const LiquidLooks& looks, RunSummary& sum, core::Progress& progress) {
   std::vector<fs::path> files;
   for (int k = 0; k <= last_frame; ++k) files.push_back(io::frame_path(out, k));
   MeshOptions mo;
@@ -426,6 +426,7 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   mo.vdb = opt.vdb;
   mo.max_memory_mib = memory_limit_mib(scene, opt.max_memory_mib);
   for (const auto& t : scene.targets) mo.target_tints.push_back(t.tint);
+  mo.looks = &looks;
   if (opt.mesh_every > 0) {
     mo.every = opt.mesh_every;
   } else if (opt.animation) {
@@ -447,9 +448,12 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
 /// the last frame (pose/skin_transfer.h), moved to the bind pose, with the target's skeleton and clips, so that
 /// it plays with no rigging step. The keyframed pose of that time, if any, is taken off first.
 Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const TargetGeometry& target,
-                      const pose::TargetMotion& motion, double time, RunSummary& sum) {
+                      const pose::TargetMotion& motion, double time, const LiquidLooks& looks, RunSummary& sum) {
   auto formed = io::load_mesh(out / "mesh" / "final.obj");
   if (!formed) return Error{formed.error().kind, "rigging: " + formed.error().message};
+  // The look of the final mesh, as final.obj has it (load_mesh reads positions only; one target: no labels).
+  std::vector<Vec3f> colours;
+  if (looks.coloured()) colours = liquid_colours(looks, *formed, {}, time);
   const Eigen::Affine3f rest = motion.at(time).rest_from_world();
   for (Vec3f& v : formed->vertices) v = rest * v;
   const pose::TargetSkin& skin = *target.skin;
@@ -463,6 +467,7 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
     if (played.name.empty()) played.name = fmt::format("clip_{}", skin.clip);  // as write_rigged_glb names it
     clips.clips.push_back(pose::pingpong_clip(played));
   }
+  rigged.bind_mesh.colours = std::move(colours);  // same vertices, same order
   FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, clips,
                                 scene.targets[0].transform, scene.targets[0].tint));
   spdlog::info("rigged.glb: the final mesh in bind pose with {} joints and {} clip(s) ({} vertices by the fallback, "
@@ -599,9 +604,12 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   FF_CHECK(write_report(out, facts, st, "ok", ""));
 
   RunSummary sum = run_summary(facts, st, last_frame);
-  if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, sum, progress));
+  // The liquid's look (targets[].appearance): read only for the meshes; a texture that cannot be used only warns.
+  LiquidLooks looks;
+  if (opt.mesh) looks = load_liquid_looks(scene, geometry, prepared.motions);
+  if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, looks, sum, progress));
   if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
-    FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, sum));
+    FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, looks, sum));
   FF_CHECK(write_page(out, PageSources{opt.mesh, opt.mesh && (opt.mesh_every > 0 || opt.animation)}));
   return sum;
 }

@@ -105,12 +105,12 @@ Result<Scene> parse_scene(std::string_view text, const fs::path& base_dir, std::
   s.auto_resolution = !given("sampling", "auto_count") && !given("sampling", "spacing");
   FF_CHECK(s.validate());
   // The resume hash covers everything that shapes the simulation; the frame count, the limits and the targets'
-  // tints may change between runs.
+  // tints and appearances may change between runs.
   json h = j;
   h.erase("limits");
-  if (h.contains("targets") && h["targets"].is_array())  // a target's tint colours the export only
+  if (h.contains("targets") && h["targets"].is_array())  // a target's tint and appearance colour the export only
     for (auto& t : h["targets"])
-      if (t.is_object()) t.erase("tint");
+      if (t.is_object()) t.erase("tint"), t.erase("appearance");
   if (h.contains("output") && h["output"].is_object()) {
     h["output"].erase("frames");
     if (h["output"].empty()) h.erase("output");

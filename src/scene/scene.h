@@ -42,6 +42,16 @@ constexpr std::array<core::Choice<Interpolation>, 2> field_choices(Interpolation
   return {{{Interpolation::Linear, "linear"}, {Interpolation::Smooth, "smooth"}}};
 }
 
+/// How a target's liquid looks in the exported meshes (targets[].appearance, docs/outputs.md):
+/// water: a clear, refracting liquid absorbing towards `tint` (GLB: transmission + volume; OBJ: the water MTL);
+/// tint: an opaque liquid of the colour `tint`; target: opaque, each vertex the colour of the nearest point of the
+/// target's surface (its base-colour texture at that point's UV, else its vertex colours, else its material colour).
+/// Tint and target are written as vertex colours (GLB COLOR_0, OBJ `v x y z r g b`).
+enum class Appearance { Water, Tint, Target };
+constexpr std::array<core::Choice<Appearance>, 3> field_choices(Appearance) {
+  return {{{Appearance::Water, "water"}, {Appearance::Tint, "tint"}, {Appearance::Target, "target"}}};
+}
+
 /// One target mesh of the scene.
 struct TargetSpec {
   std::filesystem::path mesh;  ///< resolved against the scene file's folder
@@ -53,6 +63,7 @@ struct TargetSpec {
   Interpolation interpolation = Interpolation::Linear;  ///< between keyframes: linear, or smoothstep ("smooth")
   /// Linear RGB this target's liquid absorbs towards in the exported GLB (its water material's attenuationColor).
   Vec3f tint{0.16f, 0.48f, 0.85f};
+  Appearance appearance = Appearance::Water;  ///< the look of its liquid in the exported meshes (see Appearance)
   /// Mesh swaps, "morph": [{"time": T, "mesh": PATH}, ...]: from T on the target is that mesh (same transform).
   struct Swap {
     double time = 0.0;
@@ -83,7 +94,8 @@ struct TargetSpec {
     f("keyframes", s.keyframes, plain("keyframed motion about the target's centre"));
     f("interpolation", s.interpolation, plain("between keyframes"));
     f("morph", s.swaps, plain("mesh swaps: from each time on the target is that mesh"));
-    f("tint", s.tint, closed(0.0, 1.0, "linear RGB its liquid absorbs towards in the GLB's water material"));
+    f("tint", s.tint, closed(0.0, 1.0, "linear RGB its liquid absorbs towards (water), or its colour (tint)"));
+    f("appearance", s.appearance, plain("its liquid's look: water (clear), tint (opaque, the tint), target (its colours)"));
     f("animation", s.animation, plain("a skinned mesh file's clip the target plays (its samples follow the skin)"));
     f("strength", s.strength, plain("control strength keyframes: 1 holds, 0 releases the fluid, between softens"));
   }

@@ -109,6 +109,8 @@ function meshGeometry(mesh) {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(bytes(mesh.positions, Float32Array), 3));
   g.setIndex(new THREE.BufferAttribute(bytes(mesh.indices, Uint32Array), 1));
+  // The liquid's look (appearance tint or target): linear RGB bytes per vertex.
+  if (mesh.colours) g.setAttribute('color', new THREE.BufferAttribute(bytes(mesh.colours, Uint8Array), 3, true));
   g.computeVertexNormals();
   return g;
 }
@@ -140,7 +142,8 @@ async function view() {
   const liquid = new THREE.Group(), overlay = new THREE.Group();
   scene.add(liquid, overlay);
   const water = new THREE.MeshStandardMaterial({ color: 0x2f8fd8, roughness: 0.25, metalness: 0.0 });
-  if (final) liquid.add(new THREE.Mesh(meshGeometry(final), water));
+  const painted = new THREE.MeshStandardMaterial({ color: 0xffffff, vertexColors: true, roughness: 0.3, metalness: 0.0 });
+  if (final) liquid.add(new THREE.Mesh(meshGeometry(final), final.colours ? painted : water));
   const ghost = new THREE.MeshBasicMaterial({ color: 0xd0632b, wireframe: true, transparent: true, opacity: 0.35 });
   for (const t of targets) overlay.add(new THREE.Mesh(meshGeometry(t), ghost));
 

@@ -288,7 +288,10 @@ function loadAnimation(url) {
     meshRoot.traverse((o) => {
       if (o.isMesh) {
         meshes += 1;
-        o.material = new THREE.MeshStandardMaterial({ color: 0x9ecbff, roughness: 0.35, metalness: 0.0 });
+        // A liquid that wears its target's look (appearance tint or target) has vertex colours: the mesh shows them.
+        const painted = !!o.geometry.getAttribute('color');
+        o.material = new THREE.MeshStandardMaterial({ color: painted ? 0xffffff : 0x9ecbff, vertexColors: painted,
+                                                      roughness: painted ? 0.3 : 0.35, metalness: 0.0 });
       }
     });
     world.add(meshRoot);

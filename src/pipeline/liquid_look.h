@@ -1,0 +1,76 @@
+#pragma once
+// The liquid's look in the exported meshes (issue 46 item 3, scene key targets[].appearance, docs/outputs.md):
+// water (the clear material, no vertex colours), tint (every vertex of its liquid the target's `tint`), or target
+// (every vertex the colour of the nearest point of its target's surface, posed at the frame's time).
+//
+// Which target a vertex belongs to: the target of the particle nearest to it within 2 spacings (the particle PLYs
+// carry it); a vertex with none there (free fluid) takes the target whose surface is nearest. A vertex of a water
+// target is white, so its GLB material (water, COLOR_0 multiplies a white base colour) looks as without colours.
+//
+// Posed. A keyframed target maps the vertex into its rest frame (the inverse of its pose at the frame's time, as the
+// metrics do); a skinned one poses its look's triangles at that time (each look vertex follows the skinned vertex at
+// its exact position, as load_mesh welded them); a morphing one uses the look of the mesh it is at that time.
+//
+// Why vertex colours and not UVs into the target's texture: the formed mesh is a new surface whose triangles
+// straddle the target's UV seams (a triangle whose corners map to both sides of a seam would smear the whole texture
+// across it), and vertex colours carry textures, vertex colours and material colours alike, for several targets in
+// one mesh. What that costs is measured by bench_scenes' look check (bench/RESULTS.md, "Results people look at").
+#include "core/error.h"
+#include "io/target_look.h"
+#include "io/triangle_mesh.h"
+#include "io/write_mesh.h"
+#include "pipeline/auto_scene.h"
+#include "pose/target_motion.h"
+#include "sampling/mesh_field.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace ff::pipeline {
+
+struct LiquidLooks {
+  struct Phase {
+    double from = 0.0;  ///< s: from when the target is this mesh (the first phase: −∞)
+    io::TargetLook look;
+    std::optional<sampling::MeshField> field;  ///< closest points on the look's triangles, rest pose
+    std::vector<Index> skin_vertex;            ///< skinned first phase: per look vertex, its vertex of the skinned mesh
+  };
+  struct Target {
+    scene::Appearance appearance = scene::Appearance::Water;
+    Vec3f tint{0.16f, 0.48f, 0.85f};
+    std::vector<Phase> phases;  ///< appearance target only
+    pose::TargetMotion motion;
+    std::shared_ptr<const pose::TargetSkin> skin;  ///< a skinned target's skin (its first phase follows it)
+    const io::TriangleMesh* skin_mesh = nullptr;   ///< the mesh the skin's weights belong to (TargetGeometry::mesh)
+  };
+  std::vector<Target> targets;
+  std::vector<std::string> warnings;  ///< textures that could not be used, looks that could not be read
+
+  /// Whether the meshes get vertex colours: some target is not water.
+  bool coloured() const;
+  /// The GLB/OBJ material of each target: its water material, or the opaque vertex-coloured one.
+  std::vector<io::WaterMaterial> materials() const;
+};
+
+/// The looks of `scene`'s targets (`geometry` from load_target_meshes, `motions` from setup_targets, each
+/// per target). A look that cannot be read (or a texture) is a warning: that target's liquid takes its material
+/// colour, or its tint when nothing of the file can be read. Cost: one Assimp import per mesh of a target whose
+/// appearance is "target".
+LiquidLooks load_liquid_looks(const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
+                              const std::vector<pose::TargetMotion>& motions);
+
+/// The colour of every vertex of `mesh`, a frame of the liquid at `time` (s). `vertex_target`: per vertex the
+/// target of its liquid (≥ the target count: none nearby, the nearest target surface decides); empty: all target 0.
+std::vector<Vec3f> liquid_colours(const LiquidLooks& looks, const io::TriangleMesh& mesh,
+                                  std::span<const std::uint8_t> vertex_target, double time);
+
+/// Per vertex of `mesh`, the target of the particle nearest to it within `2 d` (`targets`: per particle, ≥ `count`
+/// for free fluid); 255 when no targeted particle is that close.
+std::vector<std::uint8_t> vertex_targets(const io::TriangleMesh& mesh, std::span<const Vec3f> particles,
+                                         std::span<const std::uint8_t> targets, float d, std::size_t count);
+
+}  // namespace ff::pipeline
