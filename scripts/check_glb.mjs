@@ -1,7 +1,8 @@
 // Checks a GLB the way its users will open it: the Khronos glTF validator (npm gltf-validator) and three.js's
 // GLTFLoader (the loader of the WebXR viewer). Prints one JSON line:
 //   {"errors", "warnings", "messages": [first issues], "three": {"meshes", "nodes", "clips", "duration",
-//    "vertices_last", "box_last": [min, max] of the last frame's world-space positions,
+//    "vertices_last", "box_last": [min, max] of the last frame's world-space positions, "colours_last": the mean of its
+//    vertex colours (null: none), "vertex_colours": whether its material shows them,
 //    "material": the last frame's material as three.js made it: type, transmission, ior, thickness, attenuation}}
 // and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
 import { validate_glb } from './glb_report.mjs';
@@ -42,6 +43,16 @@ try {
     visible_at_end: visible.length,
     vertices_last: last ? last.geometry.attributes.position.count : 0,
     box_last: box ? [box.min.toArray(), box.max.toArray()] : null,
+    // The last frame's vertex colours as three.js reads them (COLOR_0, linear): their mean, or null without any.
+    colours_last: last && last.geometry.attributes.color
+      ? [0, 1, 2].map((c) => {
+          const a = last.geometry.attributes.color;
+          let sum = 0;
+          for (let i = 0; i < a.count; i++) sum += a.getComponent(i, c);
+          return sum / a.count;
+        })
+      : null,
+    vertex_colours: last ? !!last.material.vertexColors : false,
     material: last
       ? {
           type: last.material.type,

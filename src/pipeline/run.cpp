@@ -477,6 +477,17 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
   return {};
 }
 
+/// The meshes (mesh_run) in the liquid's look (targets[].appearance: read only for the meshes; a texture that cannot
+/// be used only warns), and rigged.glb for one skinned target.
+Status mesh_and_rig(const fs::path& out, const scene::Scene& scene, const std::vector<TargetGeometry>& geometry,
+                    const std::vector<pose::TargetMotion>& motions, int last_frame, double time, const RunOptions& opt,
+                    RunSummary& sum, core::Progress& progress) {
+  const LiquidLooks looks = load_liquid_looks(scene, geometry, motions);
+  FF_CHECK(mesh_run(out, scene, last_frame, opt, looks, sum, progress));
+  if (geometry.size() == 1 && geometry[0].skin) FF_CHECK(rig_final_mesh(out, scene, geometry[0], motions[0], time, looks, sum));
+  return {};
+}
+
 /// The output folder made ready before anything is written: writable, an interrupted run's partial files removed, a
 /// fresh run's old checkpoints removed, particles/ and checkpoint/ made. Inputs are all checked before it is touched.
 Status prepare_out_dir(const fs::path& out, const scene::Scene& scene, const RunOptions& opt, bool resume) {
@@ -604,12 +615,7 @@ Result<RunSummary> run_scene(const scene::Scene& scene_in, const RunOptions& opt
   FF_CHECK(write_report(out, facts, st, "ok", ""));
 
   RunSummary sum = run_summary(facts, st, last_frame);
-  // The liquid's look (targets[].appearance): read only for the meshes; a texture that cannot be used only warns.
-  LiquidLooks looks;
-  if (opt.mesh) looks = load_liquid_looks(scene, geometry, prepared.motions);
-  if (opt.mesh) FF_CHECK(mesh_run(out, scene, last_frame, opt, looks, sum, progress));
-  if (opt.mesh && geometry.size() == 1 && geometry[0].skin)
-    FF_CHECK(rig_final_mesh(out, scene, geometry[0], prepared.motions[0], st.time, looks, sum));
+  if (opt.mesh) FF_CHECK(mesh_and_rig(out, scene, geometry, prepared.motions, last_frame, st.time, opt, sum, progress));
   FF_CHECK(write_page(out, PageSources{opt.mesh, opt.mesh && (opt.mesh_every > 0 || opt.animation)}));
   return sum;
 }

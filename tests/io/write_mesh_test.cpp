@@ -220,6 +220,56 @@ TEST(WriteGlb, PassesTheKhronosValidatorAndLoadsInThreeJs) {
   }
 }
 
+// A liquid with the target's look (appearance tint or target): vertex colours as OBJ `v x y z r g b` (sRGB) naming the
+// MTL's opaque "liquid", and as the GLB's COLOR_0 with an opaque material, which the Khronos validator passes and
+// three.js shows (the colours three.js reads back are the ones written).
+TEST(WriteGlb, VertexColoursInObjAndGlbPassTheValidatorAndShowInThreeJs) {
+  auto f = frames();
+  for (auto& m : f) {
+    m.colours.resize(m.vertices.size());
+    for (std::size_t i = 0; i < m.vertices.size(); ++i) m.colours[i] = Vec3f(0.8f, i % 2 ? 0.5f : 0.1f, 0.05f);
+  }
+  const std::string obj = encode_obj(f[0], true, "c", "water.mtl");
+  EXPECT_NE(obj.find("mtllib water.mtl\nusemtl liquid\n"), std::string::npos);
+  // 0.8 linear is sRGB 231/255 = 0.9059, 0.1 is 89/255 = 0.3490, 0.05 is 63/255 = 0.2471.
+  EXPECT_NE(obj.find(" 0.9059 0.3490 0.2471\n"), std::string::npos) << obj.substr(0, 400);
+  const std::string mtl = encode_mtl(WaterMaterial{});
+  EXPECT_NE(mtl.find("newmtl liquid\n"), std::string::npos) << mtl;
+
+  const auto dir = test::temp_dir("glb-colours");
+  for (const bool quantize : {false, true}) {
+    GlbOptions o;
+    o.quantize = quantize;
+    o.material.coloured = true;
+    auto bytes = encode_glb(f, o);
+    ASSERT_TRUE(bytes.has_value()) << bytes.error().message;
+    const auto j = glb_json(*bytes);
+    EXPECT_FALSE(j["materials"][0].contains("extensions")) << "opaque";
+    EXPECT_EQ(j["meshes"][0]["primitives"][0]["attributes"].contains("COLOR_0"), true);
+    const auto path = dir / (quantize ? "q.glb" : "f.glb");
+    ASSERT_TRUE(write_glb(path, f, o).ok());
+    const std::string cmd = "node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" + path.string() + "' 2>&1";
+    std::string out;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[4096];
+    while (std::fgets(buf, sizeof buf, p)) out += buf;
+    ASSERT_EQ(::pclose(p), 0) << out;
+    const auto r = nlohmann::json::parse(out, nullptr, false);
+    ASSERT_FALSE(r.is_discarded()) << out;
+    EXPECT_EQ(r["errors"], 0) << out;
+    EXPECT_EQ(r["warnings"], 0) << out;
+    EXPECT_TRUE(r["three"]["vertex_colours"].get<bool>()) << out;
+    ASSERT_TRUE(r["three"]["colours_last"].is_array()) << out;
+    EXPECT_NEAR(r["three"]["colours_last"][0].get<double>(), 0.8, 0.01) << out;
+    EXPECT_NEAR(r["three"]["colours_last"][1].get<double>(), 0.3, 0.02) << out;
+    EXPECT_NEAR(r["three"]["colours_last"][2].get<double>(), 0.05, 0.01) << out;
+  }
+  // Colours that do not match the vertices are an error, not a file.
+  f[1].colours.pop_back();
+  EXPECT_FALSE(encode_glb(f, GlbOptions{}).has_value());
+}
+
 TEST(WritePc2, HeaderAndSamplesAreTheBlenderLayout) {
   const auto dir = test::temp_dir("pc2");
   std::vector<std::vector<Vec3f>> f = {{{0, 1, 2}, {3, 4, 5}}, {{6, 7, 8}, {9, 10, 11}}, {{1, 1, 1}, {2, 2, 2}}};
