@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -36,13 +37,24 @@ float clamp01(float v) { return std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0
 // ---- in the child: Assimp's scene → TargetLook ----
 
 // The texture file a material names: as written, beside the model, or (a path from another machine) its file name
-// beside the model.
-fs::path find_texture_file(const fs::path& model, const std::string& name) {
+// beside the model; files written on Windows also with '\\' as separators and the name's case ignored.
+fs::path find_texture_file(const fs::path& model, std::string name) {
+  std::replace(name.begin(), name.end(), '\\', '/');
   const fs::path given(name);
   const fs::path dir = model.parent_path();
-  for (const fs::path& p : {given, dir / given, dir / given.filename()}) {
-    std::error_code ec;
-    if (!p.empty() && fs::is_regular_file(p, ec)) return p;
+  std::string relative = name;
+  while (!relative.empty() && relative[0] == '/') relative.erase(0, 1);
+  std::error_code ec;
+  const auto lower = [](std::string t) {
+    for (char& c : t) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return t;
+  };
+  for (const fs::path& p : {given, dir / given, dir / fs::path(relative), dir / given.filename()}) {
+    if (p.empty()) continue;
+    if (fs::is_regular_file(p, ec)) return p;
+    if (!fs::is_directory(p.parent_path(), ec)) continue;
+    for (const auto& e : fs::directory_iterator(p.parent_path(), ec))
+      if (e.is_regular_file(ec) && lower(e.path().filename().string()) == lower(p.filename().string())) return e.path();
   }
   return {};
 }

@@ -8,7 +8,9 @@
 #include "io/write_mesh.h"
 #include "io/write_ply.h"
 #include "io/write_vdb.h"
+#include "surface/decimate.h"
 #include "surface/mesh_check.h"
+#include "pipeline/report_page.h"
 #include "surface/reconstruct.h"
 
 #include <fmt/format.h>
@@ -234,6 +236,67 @@ Status write_point_cache(std::span<const fs::path> frames, const io::ParticleFra
   return pc2.finish();
 }
 
+// The page's lighter copy of an animation.glb over kPageAnimationBytes (report_page.h): at most kPageFrames frames
+// (every k-th, and the last), each decimated to an equal share of a triangle budget sized from the full file's bytes
+// per triangle (70 % of the page's limit), colours carried. Decimation cannot always reach its budget (a pass that
+// would pinch the surface is refused, and a liquid full of tunnels refuses many: measured on the duck's forming, some
+// frames stayed at 2–3× the budget): a frame still over twice its share is left out of the copy (the timeline skips
+// it), and so is a frame with per-triangle materials or that is not a clean mesh; then the largest frames (never the
+// last) are left out until the estimate fits. A copy that still does not fit is not written, and the page says the
+// animation is too large.
+constexpr std::size_t kPageFrames = 30;
+Status write_page_animation(const fs::path& out, const std::vector<io::TriangleMesh>& meshes, const io::GlbOptions& g,
+                            std::size_t full_bytes) {
+  std::size_t triangles = 0;
+  for (const auto& m : meshes) triangles += m.triangles.size();
+  const std::size_t step = (meshes.size() + kPageFrames - 1) / kPageFrames;
+  std::vector<std::size_t> keep;
+  for (std::size_t k = 0; k < meshes.size(); k += step) keep.push_back(k);
+  if (keep.back() != meshes.size() - 1) keep.push_back(meshes.size() - 1);
+  const double per_triangle = double(full_bytes) / double(std::max<std::size_t>(triangles, 1));
+  const auto budget = static_cast<std::size_t>(0.7 * double(kPageAnimationBytes) / per_triangle / double(keep.size()));
+  std::vector<io::TriangleMesh> light;
+  io::GlbOptions lg = g;
+  lg.times.clear(), lg.triangle_material.clear();
+  for (const std::size_t k : keep) {
+    const io::TriangleMesh& m = meshes[k];
+    io::TriangleMesh d;
+    if (m.triangles.size() <= budget) {
+      d = m;
+    } else if (g.triangle_material.empty() && surface::check_mesh(m).ok_allowing_cavities()) {
+      surface::DecimateParams p;
+      p.max_triangles = std::max<std::size_t>(budget, 200);
+      p.allow_cavities = true;
+      d = surface::decimate(m, p);
+      surface::carry_colours(m, d);
+    }
+    if (d.triangles.empty() != m.triangles.empty() || d.triangles.size() > 2 * std::max<std::size_t>(budget, 200)) continue;
+    lg.times.push_back(g.times.empty() ? double(k) / g.fps : g.times[k]);
+    if (!g.triangle_material.empty()) lg.triangle_material.push_back(g.triangle_material[k]);
+    light.push_back(std::move(d));
+  }
+  std::size_t total = 0;
+  for (const auto& m : light) total += m.triangles.size();
+  while (light.size() > 1 && double(total) * per_triangle > 0.9 * double(kPageAnimationBytes)) {
+    const auto big = std::max_element(light.begin(), light.end() - 1, [](const auto& a, const auto& b) {
+      return a.triangles.size() < b.triangles.size();
+    });
+    const auto at = big - light.begin();
+    total -= big->triangles.size();
+    light.erase(big), lg.times.erase(lg.times.begin() + at);
+    if (!lg.triangle_material.empty()) lg.triangle_material.erase(lg.triangle_material.begin() + at);
+  }
+  if (light.empty()) return {};
+  FF_TRY(const std::vector<std::uint8_t> bytes, io::encode_glb(light, lg));
+  spdlog::debug("mesh: page animation: {} frames, budget {} triangles each, {} triangles in all, {} bytes", light.size(),
+                budget, total, bytes.size());
+  if (bytes.size() > kPageAnimationBytes) {
+    spdlog::info("mesh: no lighter animation for report.html ({:.1f} MB even decimated)", double(bytes.size()) / 1e6);
+    return {};
+  }
+  return io::write_file_atomic(out / kPageAnimationFile, bytes);
+}
+
 }  // namespace
 
 Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::path& out, const MeshOptions& o,
@@ -298,7 +361,12 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
       const long k = io::frame_number(frames[c]);
       g.times.push_back(double(k >= 0 ? k : static_cast<long>(c)) / o.fps);
     }
-    FF_CHECK(io::write_glb(out / "animation.glb", meshes, g));
+    FF_TRY(const std::vector<std::uint8_t> glb, io::encode_glb(meshes, g));
+    FF_CHECK(io::write_file_atomic(out / "animation.glb", glb));
+    // The page's copy is derived from this animation.glb: an earlier run's is removed first.
+    std::error_code ec;
+    fs::remove(out / kPageAnimationFile, ec);
+    if (glb.size() > kPageAnimationBytes) FF_CHECK(write_page_animation(out, meshes, g, glb.size()));
   }
   if (o.pc2 && !o.final_only) FF_CHECK(write_point_cache(frames, *last, out));
   sum.seconds = watch.seconds();

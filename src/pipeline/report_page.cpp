@@ -51,12 +51,7 @@ Result<io::TriangleMesh> page_mesh(const io::TriangleMesh& in, std::string_view 
   surface::DecimateParams p;
   p.max_triangles = kPageTriangles;
   io::TriangleMesh out = surface::decimate(in, p);
-  if (!in.colours.empty()) {  // decimation moves vertices: each takes the colour of the nearest vertex it came from
-    const core::PointTree tree(in.vertices);
-    out.colours.resize(out.vertices.size());
-    for (std::size_t v = 0; v < out.vertices.size(); ++v)
-      out.colours[v] = in.colours[tree.original(tree.nearest(out.vertices[v]).slot)];
-  }
+  surface::carry_colours(in, out);
   return out;
 }
 
@@ -249,10 +244,19 @@ Result<ReportPage> write_report_page(const fs::path& out_dir, const PageSources&
   data["animation"] = nullptr;
   std::error_code ec;
   if (const fs::path glb = out_dir / "animation.glb"; sources.animation && fs::is_regular_file(glb, ec)) {
-    if (const auto size = fs::file_size(glb, ec); !ec && size <= kPageAnimationBytes) {
-      std::ifstream g(glb, std::ios::binary);
+    // animation.glb itself when it is small enough, else its lighter copy for the page (mesh_export.h).
+    const fs::path light = out_dir / kPageAnimationFile;
+    const auto size = fs::file_size(glb, ec);
+    const bool own = !ec && size <= kPageAnimationBytes;
+    std::error_code ec2;
+    const bool copy = !own && fs::is_regular_file(light, ec2) && fs::file_size(light, ec2) <= kPageAnimationBytes && !ec2;
+    if (own || copy) {
+      std::ifstream g(own ? glb : light, std::ios::binary);
       const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
       data["animation"] = base64_of(bytes), page.animation = true;
+      if (copy)
+        data["animation_note"] = fmt::format("the timeline plays {}, a lighter copy of animation.glb ({:.1f} MB) made for "
+                                             "this page", kPageAnimationFile, double(size) / 1e6);
     } else if (!ec) {
       data["animation_note"] = fmt::format("the meshed forming is in animation.glb ({:.1f} MB, more than the {:.0f} MB "
                                            "this page carries)", double(size) / 1e6, double(kPageAnimationBytes) / (1 << 20));

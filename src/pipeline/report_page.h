@@ -14,8 +14,10 @@ namespace ff::pipeline {
 /// The most triangles of each mesh the page carries (the final mesh and each target are decimated to it): ~1.4 MB of
 /// base64 each, so that the default scene's page stays well under 5 MB.
 inline constexpr std::size_t kPageTriangles = 60'000;
-/// The largest animation.glb the page carries (base64 makes it a third larger); a larger one stays beside it.
+/// The largest animation.glb the page carries (base64 makes it a third larger); a larger one stays beside it, and the
+/// page plays its lighter copy, kPageAnimationFile (fewer frames, decimated: pipeline/mesh_export.h), instead.
 inline constexpr std::size_t kPageAnimationBytes = 2u << 20;
+inline constexpr const char* kPageAnimationFile = "animation_page.glb";
 
 struct ReportPage {
   std::size_t bytes = 0;         ///< size of the page written

@@ -2,6 +2,8 @@
 
 #include "surface/mesh_topology.h"
 
+#include "core/point_tree.h"
+
 #include <Eigen/Geometry>
 #include <meshoptimizer.h>
 
@@ -109,6 +111,19 @@ io::TriangleMesh decimate(const io::TriangleMesh& mesh, const DecimateParams& pa
   }
   if (stats) *stats = st;
   return cur;
+}
+
+void carry_colours(const io::TriangleMesh& from, io::TriangleMesh& to) {
+  to.colours.clear();
+  if (from.colours.size() != from.vertices.size() || from.vertices.empty()) return;
+  const core::PointTree tree(from.vertices);
+  to.colours.resize(to.vertices.size());
+  Index hint = kInvalidIndex;
+  for (std::size_t v = 0; v < to.vertices.size(); ++v) {
+    const auto n = tree.nearest(to.vertices[v], hint);
+    hint = n.slot;
+    to.colours[v] = from.colours[tree.original(n.slot)];
+  }
 }
 
 }  // namespace ff::surface

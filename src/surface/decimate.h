@@ -32,4 +32,8 @@ struct DecimateStats {
 /// kept. Deterministic (meshoptimizer is single-threaded).
 io::TriangleMesh decimate(const io::TriangleMesh& mesh, const DecimateParams& params, DecimateStats* stats = nullptr);
 
+/// Vertex colours for `to`, a decimated copy of `from` (decimation moves and merges vertices): each vertex the colour of
+/// the nearest vertex of `from`. Nothing when `from` has none.
+void carry_colours(const io::TriangleMesh& from, io::TriangleMesh& to);
+
 }  // namespace ff::surface

@@ -2,6 +2,7 @@
 // default bunny judged against the target, and the exports opened where users open them (three.js and the
 // Khronos validator through node, Blender headless).
 #include "e2e/cli_support.h"
+#include "pipeline/report_page.h"
 #include "io/load_mesh.h"
 #include "io/write_ply.h"
 #include "pipeline/run.h"
@@ -125,6 +126,7 @@ TEST(MeshCommand, FramesGiveWatertightObjsAValidGlbAndAPointCache) {
   EXPECT_EQ(j["errors"], 0) << out;
   EXPECT_EQ(j["three"]["meshes"], 4) << out;
   EXPECT_EQ(j["three"]["visible_at_end"], 1) << out;
+  EXPECT_FALSE(fs::exists(dir / "out" / pipeline::kPageAnimationFile)) << "a small animation needs no copy for the page";
   expect_no_temp_files(dir / "out");
 
 #ifdef FF_HAVE_OPENVDB
@@ -173,6 +175,34 @@ TEST(MeshCommand, FramesGiveWatertightObjsAValidGlbAndAPointCache) {
 
 // Two targets' fluid (target ids 0 and 1) meshed from a run's folder: the GLB gets one water material per target,
 // tinted as the report's targets[].tint, and each triangle the material of the target whose fluid it bounds.
+// An animation.glb larger than report.html carries (2 MiB) gets a lighter copy beside it for the page: fewer frames,
+// decimated, under the limit, valid, ending on the last frame.
+TEST(MeshCommand, ALargeAnimationGetsALighterCopyForThePage) {
+  const auto dir = test::temp_dir("mesh-page-copy");
+  const float d = 0.025f;
+  fs::create_directories(dir / "particles");
+  for (int k = 0; k < 16; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.ply", k);
+    write_frame(dir / "particles" / name, ball(d, 0.45f, Vec3f(0.02f * float(k), 0.5f, 0.0f)), "fluidform particles\nspacing 0.025");
+  }
+  const auto r = run({"mesh", dir.string(), "-o", (dir / "out").string(), "--no-quantize"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_GT(fs::file_size(dir / "out" / "animation.glb"), pipeline::kPageAnimationBytes) << "the test needs a large one";
+  const fs::path copy = dir / "out" / pipeline::kPageAnimationFile;
+  ASSERT_TRUE(fs::exists(copy));
+  EXPECT_LE(fs::file_size(copy), pipeline::kPageAnimationBytes);
+  const auto [rc, out] = shell("node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" + copy.string() + "'");
+  ASSERT_EQ(rc, 0) << out;
+  const auto j = json_line(out);
+  ASSERT_FALSE(j.is_discarded()) << out;
+  EXPECT_EQ(j["errors"], 0) << out;
+  EXPECT_GE(j["three"]["meshes"].get<int>(), 2) << out;
+  EXPECT_EQ(j["three"]["visible_at_end"], 1) << out;
+  EXPECT_NEAR(j["three"]["duration"].get<double>(), 16.0 / 60.0, 1e-3) << out << " (the last frame, held 1/60 s)";
+  expect_no_temp_files(dir / "out");
+}
+
 TEST(MeshCommand, TwoTargetsGetTheirOwnTintInTheGlb) {
   const auto dir = test::temp_dir("tint");
   const float d = 0.05f;
