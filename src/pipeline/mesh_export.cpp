@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <numeric>
 #include <string_view>
 
 namespace ff::pipeline {
@@ -154,6 +155,7 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
   std::vector<Error> errors(chosen.size());
   std::vector<char> failed(chosen.size(), 0);
   std::vector<surface::SurfaceStats> stats(chosen.size());
+  std::vector<double> colouring(chosen.size(), 0.0);  // s per frame spent on the liquid's look
   progress.begin("meshing", chosen.size());
   std::atomic<std::size_t> done{0};
   std::atomic<bool> cancelled{false};
@@ -176,7 +178,9 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
         const std::vector<std::uint8_t> vt =
             n > 1 ? vertex_targets(meshes[c], f->positions, f->targets, d, n) : std::vector<std::uint8_t>();
         const double time = double(k >= 0 ? k : static_cast<long>(chosen[c])) / o.fps;
+        const core::Stopwatch watch;
         meshes[c].colours = liquid_colours(*o.looks, meshes[c], vt, time);
+        colouring[c] = watch.seconds();
       }
       if (o.vdb) {
         // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.
@@ -206,6 +210,9 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
   for (std::size_t c = 0; c < chosen.size(); ++c)
     if (failed[c]) return errors[c];
   last_stats = stats.back();
+  if (o.looks != nullptr && o.looks->coloured())
+    spdlog::info("mesh: the liquid's look on {} frame(s) in {:.2f} s (summed over frames)", chosen.size(),
+                 std::accumulate(colouring.begin(), colouring.end(), 0.0));
   return meshes;
 }
 
@@ -247,6 +254,7 @@ Status write_point_cache(std::span<const fs::path> frames, const io::ParticleFra
 constexpr std::size_t kPageFrames = 30;
 Status write_page_animation(const fs::path& out, const std::vector<io::TriangleMesh>& meshes, const io::GlbOptions& g,
                             std::size_t full_bytes) {
+  const core::Stopwatch watch;
   std::size_t triangles = 0;
   for (const auto& m : meshes) triangles += m.triangles.size();
   const std::size_t step = (meshes.size() + kPageFrames - 1) / kPageFrames;
@@ -288,13 +296,14 @@ Status write_page_animation(const fs::path& out, const std::vector<io::TriangleM
   }
   if (light.empty()) return {};
   FF_TRY(const std::vector<std::uint8_t> bytes, io::encode_glb(light, lg));
-  spdlog::debug("mesh: page animation: {} frames, budget {} triangles each, {} triangles in all, {} bytes", light.size(),
-                budget, total, bytes.size());
   if (bytes.size() > kPageAnimationBytes) {
     spdlog::info("mesh: no lighter animation for report.html ({:.1f} MB even decimated)", double(bytes.size()) / 1e6);
     return {};
   }
-  return io::write_file_atomic(out / kPageAnimationFile, bytes);
+  FF_CHECK(io::write_file_atomic(out / kPageAnimationFile, bytes));
+  spdlog::info("mesh: {} for report.html: {} of {} frames, {} triangles, {:.1f} MB, in {:.2f} s", kPageAnimationFile,
+               light.size(), meshes.size(), total, double(bytes.size()) / 1e6, watch.seconds());
+  return {};
 }
 
 }  // namespace

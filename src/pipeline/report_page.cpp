@@ -8,6 +8,7 @@
 #include "io/picture.h"
 #include "io/target_look.h"
 #include "core/point_tree.h"
+#include "pose/target_motion.h"
 #include "scene/scene.h"
 #include "surface/decimate.h"
 
@@ -142,6 +143,41 @@ json page_warnings(const json& report) {
 
 // The targets at their scene transform (the rest pose), from report.json's scene, for the page (`json`) and its
 // picture (`merged`); one that cannot be read is left out with a warning.
+// Target t as the run left it at `end` (s): the mesh of its morph phase then, moved by its keyframes' pose then (about
+// its first mesh's box centre, as the run poses it), in its look when its liquid wears it (for the still picture).
+struct EndTarget {
+  io::TriangleMesh mesh, painted;
+};
+Result<EndTarget> target_at_end(const scene::TargetSpec& t, double end) {
+  fs::path file = t.mesh;
+  for (const auto& swap : t.swaps)
+    if (end >= swap.time) file = swap.mesh;
+  EndTarget e;
+  FF_TRY(e.mesh, io::load_mesh(file, io::LoadOptions{t.transform}));
+  e.painted = e.mesh;
+  if (t.appearance == scene::Appearance::Target) {
+    if (auto look = io::load_target_look(file, t.transform)) {  // each vertex its colour there
+      e.painted = look->mesh;
+      e.painted.colours.assign(e.painted.vertices.size(), Vec3f::Ones());
+      for (Index f = 0; f < e.painted.triangles.size(); ++f)
+        for (int c = 0; c < 3; ++c) e.painted.colours[e.painted.triangles[f][c]] = look->colour_at(f, Vec3f::Unit(c));
+    }
+  }
+  if (!t.keyframes.empty()) {
+    Aabb box = e.mesh.bounds();
+    if (file != t.mesh)
+      if (auto first = io::load_mesh(t.mesh, io::LoadOptions{t.transform})) box = first->bounds();
+    const pose::TargetMotion motion{t.keyframes, t.smooth(), 0.5f * (box.min + box.max)};
+    const pose::Pose pose = motion.at(end);
+    for (Vec3f& v : e.mesh.vertices) v = pose.apply(v);
+    for (Vec3f& v : e.painted.vertices) v = pose.apply(v);
+  }
+  return e;
+}
+
+// The targets as the run left them (morph phase and keyframed pose at its end; a skinned one at its bind pose, said so),
+// from report.json's scene, for the page (`json`) and its picture (`merged`); one that cannot be read is left out with
+// a warning.
 json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) {
   json out = json::array();
   if (!report.contains("scene")) return out;
@@ -150,34 +186,23 @@ json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) 
     warnings.push_back(fmt::format("the targets are not shown: {}", scene.error().message));
     return out;
   }
+  const json& totals = report.value("totals", json::object());
+  const double end = totals.contains("simulated_seconds") && totals["simulated_seconds"].is_number()
+                         ? totals["simulated_seconds"].get<double>() : 0.0;
   for (std::size_t k = 0; k < scene->targets.size(); ++k) {
     const auto& t = scene->targets[k];
-    auto mesh = io::load_mesh(t.mesh, io::LoadOptions{t.transform});
-    if (!mesh) {
-      warnings.push_back(fmt::format("target {} is not shown: {}", k, mesh.error().message));
+    auto e = target_at_end(t, end);
+    if (!e) {
+      warnings.push_back(fmt::format("target {} is not shown: {}", k, e.error().message));
       continue;
     }
-    // A target whose liquid wears its look is drawn in it (each vertex its colour there) in the still picture.
-    if (t.appearance == scene::Appearance::Target) {
-      if (auto look = io::load_target_look(t.mesh, t.transform)) {
-        io::TriangleMesh painted = look->mesh;
-        painted.colours.assign(painted.vertices.size(), Vec3f::Ones());
-        for (Index f = 0; f < painted.triangles.size(); ++f)
-          for (int c = 0; c < 3; ++c)
-            painted.colours[painted.triangles[f][c]] = look->colour_at(f, Vec3f::Unit(c));
-        append_mesh(merged, painted);
-      } else {
-        append_mesh(merged, *mesh);
-      }
-    } else {
-      append_mesh(merged, *mesh);  // the still picture takes any mesh, the 3D view at most kPageTriangles
-    }
-    auto m = page_mesh(*mesh, fmt::format("target {}", k));
+    append_mesh(merged, e->painted);  // the still picture takes any mesh, the 3D view at most kPageTriangles
+    auto m = page_mesh(e->mesh, fmt::format("target {}", k));
     if (m) out.push_back(mesh_json(*m));
     else warnings.push_back(fmt::format("target {} is not in the 3D view: {}", k, m.error().message));
-    if (!t.keyframes.empty() || !t.swaps.empty() || t.animation.active())
-      warnings.push_back(fmt::format("target {} moves: it is shown at its scene transform (rest pose), the formed shape "
-                                     "at the end of the run", k));
+    if (t.animation.active())
+      warnings.push_back(fmt::format("target {} plays a skinned clip: it is shown at its bind pose, the formed shape at "
+                                     "the end of the run", k));
   }
   return out;
 }

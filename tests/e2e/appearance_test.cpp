@@ -82,6 +82,22 @@ double mean_difference(const ColouredMesh& m, const io::TargetLook& look, bool f
   return sum / (3.0 * double(m.positions.size()));
 }
 
+// The 1 % of the liquid farthest along `facing` is the duck's orange beak, the 1 % farthest back its yellow tail (green
+// 0.49 and 0.85 of red when this was written).
+void expect_beak_and_tail(const ColouredMesh& m, const Vec3f& facing) {
+  std::vector<std::size_t> order(m.positions.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return m.positions[a].dot(facing) > m.positions[b].dot(facing); });
+  const auto green_over_red = [&](std::size_t from, std::size_t to) {
+    double g = 0.0, red = 0.0;
+    for (std::size_t k = from; k < to; ++k) g += m.srgb[order[k]][1], red += m.srgb[order[k]][0];
+    return g / std::max(red, 1.0);
+  };
+  const std::size_t one = order.size() / 100;
+  EXPECT_LT(green_over_red(0, one), 0.65) << "the beak is orange";
+  EXPECT_GT(green_over_red(order.size() - one, order.size()), 0.75) << "the tail is yellow";
+}
+
 std::string duck_scene(const fs::path& mesh) {
   return R"({"targets": [{"mesh": ")" + mesh.string() +
          R"(", "appearance": "target"}], "sampling": {"auto_count": 3000, "max_auto_count": 3000}})";
@@ -105,19 +121,8 @@ TEST(Appearance, TheFormedDuckWearsItsTextureAtTheNearestPoint) {
               m.positions.size(), diff, flipped);
   EXPECT_LT(diff, 6.0);
   EXPECT_GT(flipped, 3.0 + 3.0 * diff);
-  // And where a person looks: the duck faces +x, so the 1 % of the liquid farthest along +x is its orange beak, the 1 %
-  // farthest back its yellow tail (green 0.49 and 0.85 of red when this was written).
-  std::vector<std::size_t> order(m.positions.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return m.positions[a].x() > m.positions[b].x(); });
-  const auto green_over_red = [&](std::size_t from, std::size_t to) {
-    double g = 0.0, red = 0.0;
-    for (std::size_t k = from; k < to; ++k) g += m.srgb[order[k]][1], red += m.srgb[order[k]][0];
-    return g / std::max(red, 1.0);
-  };
-  const std::size_t one = order.size() / 100;
-  EXPECT_LT(green_over_red(0, one), 0.65) << "the beak is orange";
-  EXPECT_GT(green_over_red(order.size() - one, order.size()), 0.75) << "the tail is yellow";
+  // And where a person looks: the duck faces +x.
+  expect_beak_and_tail(m, Vec3f::UnitX());
 
   // The GLB: validator-clean, and three.js shows a yellow liquid.
   const std::string cmd = "node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
@@ -161,6 +166,22 @@ TEST(Appearance, BlenderImportsTheColouredLiquid) {
   const auto& last = j["meshes"].back()["mean"];
   EXPECT_GT(last[0].get<double>(), 0.5) << out;
   EXPECT_LT(last[2].get<double>(), 0.1) << out;
+}
+
+// A keyframed duck (moved and turned 60° about y by the end) is coloured in its pose at each frame: the formed
+// liquid's beak is where the turned duck's beak is.
+TEST(Appearance, AMovingDuckIsColouredInItsPose) {
+  const fs::path dir = test::temp_dir("appearance-moving");
+  e2e::write_scene(dir, R"({"targets": [{"mesh": ")" + kDuck.string() + R"(", "scale": 0.3, "appearance": "target",
+      "keyframes": [{"time": 0, "translate": [0, 0, 0]}, {"time": 1.5, "translate": [0.4, 0, 0], "rotate": [0, 60, 0]}]}],
+      "sampling": {"auto_count": 3000, "max_auto_count": 3000}})");
+  const auto r = e2e::run({"run", (dir / "scene.json").string(), "-o", (dir / "out").string(), "--frames", "150",
+                           "--no-animation", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const ColouredMesh m = read_coloured_obj(dir / "out" / "mesh" / "final.obj");
+  ASSERT_GT(m.positions.size(), 500u);
+  const float a = 60.0f * float(M_PI) / 180.0f;
+  expect_beak_and_tail(m, Vec3f(std::cos(a), 0.0f, -std::sin(a)));  // R_y(60°) · x
 }
 
 TEST(Appearance, AMissingTextureWarnsAndTheRunGoesOn) {
