@@ -22,8 +22,7 @@ namespace ff::io::glb {
 using nlohmann::json;
 
 // glTF enums (WebGL names).
-inline constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120,
-                     kUnsignedByte = 5121;
+inline constexpr int kFloat = 5126, kUnsignedInt = 5125, kUnsignedShort = 5123, kShort = 5122, kByte = 5120;
 inline constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
 /// Appends the little-endian bytes of `v`.
@@ -84,15 +83,16 @@ inline Result<std::vector<std::uint8_t>> pack_glb(const json& doc, const std::ve
 /// Roughness of the opaque, vertex-coloured liquid (appearance tint or target): a wet, glossy surface.
 inline constexpr float kColouredRoughness = 0.3f;
 
-/// COLOR_0 of a mesh: linear RGB as normalized unsigned bytes, VEC4 (4-byte aligned; alpha 255).
+/// COLOR_0 of a mesh: linear RGB as normalized unsigned shorts, VEC4 (8 bytes, 4-byte aligned; alpha 1): 8 bits of
+/// linear light would band in the darks (sRGB 0–12 fall on two steps).
 inline int colour_accessor(GlbBuilder& b, const std::vector<Vec3f>& colours) {
-  std::vector<std::uint8_t> c(4 * colours.size(), 255);
+  std::vector<std::uint16_t> c(4 * colours.size(), 65535);
   for (std::size_t i = 0; i < colours.size(); ++i)
     for (int a = 0; a < 3; ++a) {
       const float v = colours[i][a];
-      c[4 * i + std::size_t(a)] = static_cast<std::uint8_t>(std::lround(std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) * 255.0f : 0.0f));
+      c[4 * i + std::size_t(a)] = static_cast<std::uint16_t>(std::lround(std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) * 65535.0f : 0.0f));
     }
-  return b.accessor(b.view(c.data(), c.size(), kArrayBuffer, 4), kUnsignedByte, colours.size(), "VEC4", nullptr, nullptr, true);
+  return b.accessor(b.view(c.data(), c.size() * 2, kArrayBuffer, 8), kUnsignedShort, colours.size(), "VEC4", nullptr, nullptr, true);
 }
 
 /// The water material (KHR_materials_transmission, _ior, _volume; a closed mesh, so the volume extension's

@@ -16,6 +16,8 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <map>
+#include <cstring>
 
 namespace ff::io {
 namespace {
@@ -33,6 +35,7 @@ Error file_error(const fs::path& path, std::string_view reason) {
 }
 
 float clamp01(float v) { return std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f; }
+float srgb_to_linear_float(float s) { return s <= 0.04045f ? s / 12.92f : std::pow((s + 0.055f) / 1.055f, 2.4f); }
 
 // ---- in the child: Assimp's scene → TargetLook ----
 
@@ -49,12 +52,17 @@ fs::path find_texture_file(const fs::path& model, std::string name) {
     for (char& c : t) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     return t;
   };
-  for (const fs::path& p : {given, dir / given, dir / fs::path(relative), dir / given.filename()}) {
-    if (p.empty()) continue;
+  std::vector<fs::path> candidates;
+  if (given.is_absolute()) candidates.push_back(given);  // a relative name is the model's folder's, never ours
+  candidates.insert(candidates.end(), {dir / fs::path(relative), dir / given.filename()});
+  for (const fs::path& p : candidates) {
+    if (p.filename().empty()) continue;
     if (fs::is_regular_file(p, ec)) return p;
     if (!fs::is_directory(p.parent_path(), ec)) continue;
-    for (const auto& e : fs::directory_iterator(p.parent_path(), ec))
-      if (e.is_regular_file(ec) && lower(e.path().filename().string()) == lower(p.filename().string())) return e.path();
+    fs::directory_iterator it(p.parent_path(), ec), end;
+    for (; !ec && it != end; it.increment(ec))
+      if (lower(it->path().filename().string()) == lower(p.filename().string()) && fs::is_regular_file(it->path(), ec))
+        return it->path();
   }
   return {};
 }
@@ -79,6 +87,7 @@ Result<Texture> decode_image(const std::uint8_t* bytes, std::size_t size) {
 Result<Texture> embedded_texture(const aiTexture& tex) {
   if (tex.pcData == nullptr) return input_error("embedded texture without data");
   if (tex.mHeight == 0) return decode_image(reinterpret_cast<const std::uint8_t*>(tex.pcData), tex.mWidth);
+  if (tex.mWidth == 0) return input_error("embedded texture of no width");
   if (tex.mWidth > unsigned(kMaxTextureSide) || tex.mHeight > unsigned(kMaxTextureSide))
     return input_error(fmt::format("{}×{} pixels, more than {} on a side", tex.mWidth, tex.mHeight, kMaxTextureSide));
   Texture t;
@@ -95,6 +104,8 @@ Result<Texture> read_texture(const fs::path& model, const aiScene& scene, const 
   if (!name.empty() && name[0] == '*') return input_error("names an embedded texture the file does not have");
   const fs::path file = find_texture_file(model, name);
   if (file.empty()) return input_error("no such file beside the model");
+  std::error_code ec;
+  if (fs::file_size(file, ec) > (std::uintmax_t{1} << 30) || ec) return input_error("is larger than 1 GiB or cannot be sized");
   std::ifstream in(file, std::ios::binary);
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) return input_error("cannot be read");
@@ -103,7 +114,9 @@ Result<Texture> read_texture(const fs::path& model, const aiScene& scene, const 
 }
 
 // Material m's colour and texture; a texture that cannot be used is a warning and the material keeps its colour.
-LookMaterial read_material(const fs::path& model, const aiScene& scene, const aiMaterial& mat, TargetLook& look) {
+// Materials naming the same texture share one decoded copy (`decoded`: name → index in look.textures).
+LookMaterial read_material(const fs::path& model, const aiScene& scene, const aiMaterial& mat, TargetLook& look,
+                           std::map<std::string, int>& decoded) {
   LookMaterial out;
   aiColor4D c;
   if (mat.Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS) {
@@ -120,19 +133,34 @@ LookMaterial read_material(const fs::path& model, const aiScene& scene, const ai
       break;
     }
   if (!has) return out;
-  auto tex = read_texture(model, scene, name.C_Str());
+  if (const auto it = decoded.find(name.C_Str()); it != decoded.end()) {
+    out.texture = it->second;
+    return out;
+  }
+  Result<Texture> tex = input_error("cannot be read");
+  try {
+    tex = read_texture(model, scene, name.C_Str());
+  } catch (const std::exception& e) {
+    tex = input_error(e.what());
+  }
   if (!tex) {
     look.warnings.push_back(fmt::format("{}: texture '{}' {}: its material colour is used", model.filename().string(),
-                                        one_line(name.C_Str(), 120), one_line(tex.error().message, 160)));
+                                        name.C_Str(), tex.error().message));
+    decoded[name.C_Str()] = -1;
     return out;
   }
   out.texture = static_cast<int>(look.textures.size());
+  decoded[name.C_Str()] = out.texture;
   look.textures.push_back(std::move(*tex));
   return out;
 }
 
 // Every triangle of every mesh, with its vertices' UVs and colours and its material.
 Status gather_meshes(const fs::path& path, const aiScene& scene, TargetLook& look) {
+  // glTF's COLOR_0 is linear; every other format's vertex colours (PLY, OBJ, Collada, FBX …) are display values, sRGB.
+  std::string ext = path.extension().string();
+  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const bool linear = ext == ".gltf" || ext == ".glb";
   bool any_uv = false, any_colour = false;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh* mesh = scene.mMeshes[m];
@@ -164,7 +192,8 @@ Status gather_meshes(const fs::path& path, const aiScene& scene, TargetLook& loo
       if (any_colour) {
         const bool has = mesh->HasVertexColors(0);
         const aiColor4D c = has ? mesh->mColors[0][v] : aiColor4D(1, 1, 1, 1);
-        look.colours.emplace_back(clamp01(c.r), clamp01(c.g), clamp01(c.b));
+        const auto lin = [&](float x) { return linear ? clamp01(x) : srgb_to_linear_float(clamp01(x)); };
+        look.colours.emplace_back(lin(c.r), lin(c.g), lin(c.b));
       }
     }
   }
@@ -180,8 +209,10 @@ Result<TargetLook> import_look(const fs::path& path) {
   if (scene == nullptr) return file_error(path, one_line(importer.GetErrorString()));
   if (scene->mNumMeshes == 0 || scene->mMeshes == nullptr) return file_error(path, "contains no meshes");
   TargetLook look;
-  for (unsigned m = 0; m < scene->mNumMaterials && m < 65535; ++m)
-    if (scene->mMaterials[m] != nullptr) look.materials.push_back(read_material(path, *scene, *scene->mMaterials[m], look));
+  std::map<std::string, int> decoded;
+  for (unsigned m = 0; m < scene->mNumMaterials && m < 65535; ++m)  // a null material keeps its index (a default)
+    look.materials.push_back(scene->mMaterials[m] != nullptr
+                                 ? read_material(path, *scene, *scene->mMaterials[m], look, decoded) : LookMaterial{});
   if (look.materials.empty()) look.materials.emplace_back();
   FF_CHECK(gather_meshes(path, *scene, look));
   return look;
@@ -211,8 +242,13 @@ std::string encode(const Result<TargetLook>& r) {
   std::vector<std::array<float, 2>> uv;
   for (const Vec2f& t : l.uv) uv.push_back({t.x(), t.y()});
   std::vector<PlainMaterial> mats;
-  for (const LookMaterial& m : l.materials)
-    mats.push_back({m.colour.x(), m.colour.y(), m.colour.z(), m.texture, std::uint8_t(m.factor_with_texture)});
+  for (const LookMaterial& m : l.materials) {
+    PlainMaterial pm;
+    std::memset(&pm, 0, sizeof pm);  // no uninitialised padding in the answer
+    pm.r = m.colour.x(), pm.g = m.colour.y(), pm.b = m.colour.z(), pm.texture = m.texture;
+    pm.factor_with_texture = std::uint8_t(m.factor_with_texture);
+    mats.push_back(pm);
+  }
   out.put_vector(xyz), out.put_vector(l.mesh.triangles), out.put_vector(uv), out.put_vector(rgb);
   out.put_vector(l.material), out.put_vector(mats);
   out.put(std::uint64_t{l.textures.size()});
@@ -242,8 +278,10 @@ bool decode_look(AnswerReader& in, TargetLook& l) {
   }
   if (!in.get_count(n, 8)) return false;
   l.warnings.resize(n);
-  for (std::string& w : l.warnings)
+  for (std::string& w : l.warnings) {
     if (!in.get_string(w)) return false;
+    w = one_line(w);
+  }
   if (!in.at_end() || mats.empty() || l.material.size() != l.mesh.triangles.size()) return false;
   if ((!uv.empty() && uv.size() != xyz.size()) || (!rgb.empty() && rgb.size() != xyz.size())) return false;
   for (const auto& p : xyz) l.mesh.vertices.emplace_back(p[0], p[1], p[2]);
@@ -308,7 +346,7 @@ Vec3f TargetLook::colour_at(Index t, const Vec3f& bary) const {
     c = sample_texture(textures[std::size_t(m.texture)], at);
     if (m.factor_with_texture) c = c.cwiseProduct(m.colour);
   } else if (!colours.empty()) {
-    c = Vec3f::Ones();
+    c = m.factor_with_texture ? m.colour : Vec3f::Ones();  // glTF: factor × COLOR_0; others: the colours alone
   }
   if (!colours.empty()) c = c.cwiseProduct(bary.x() * colours[tri[0]] + bary.y() * colours[tri[1]] + bary.z() * colours[tri[2]]);
   return c;

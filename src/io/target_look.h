@@ -7,8 +7,9 @@
 // a UV seam), node transforms baked and the scene's transform applied, so a point of the target in the world finds
 // its triangle here. The colour of a surface point (colour_at): base = the texture at its UV (bilinear, wrapping,
 // decoded from sRGB to linear) when its material has one, else white when the mesh has vertex colours, else the
-// material colour; then × the vertex colours (interpolated); then × the glTF base colour factor when the file gave
-// one with a texture (glTF's own rule: factor × texture × COLOR_0). Colours are linear RGB in [0, 1].
+// material colour; then × the vertex colours (interpolated); then × the glTF base colour factor when the file is glTF
+// (glTF's own rule: factor × texture × COLOR_0). Colours are linear RGB in [0, 1]: glTF's vertex colours are linear,
+// every other format's (PLY, OBJ, Collada, FBX) are read as sRGB display values and converted.
 //
 // Bad input. The mesh itself was read by load_mesh before (its errors are load_mesh's); here a texture that is
 // missing, unreadable or larger than kMaxTextureSide is a warning (TargetLook::warnings), and its material keeps its
@@ -37,7 +38,7 @@ struct Texture {
 struct LookMaterial {
   Vec3f colour{0.8f, 0.8f, 0.8f};  ///< linear RGB: the base (or diffuse) colour
   int texture = -1;                ///< index into TargetLook::textures, −1: none
-  bool factor_with_texture = false;  ///< glTF: the texture is multiplied by `colour`
+  bool factor_with_texture = false;  ///< glTF: the texture and the vertex colours are multiplied by `colour`
 };
 
 struct TargetLook {

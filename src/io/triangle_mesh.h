@@ -23,6 +23,7 @@ struct TriangleMesh {
 /// Removes the vertices no triangle uses; the others keep their relative order (new index = rank among the used).
 /// Returns the map old → new index (kInvalidIndex: removed).
 inline std::vector<Index> drop_unused_vertices(TriangleMesh& mesh) {
+  if (mesh.colours.size() != mesh.vertices.size()) mesh.colours.clear();  // colours that do not match are none
   std::vector<Index> map(mesh.vertices.size(), kInvalidIndex);
   for (const auto& t : mesh.triangles)
     for (const Index v : t) map[v] = 0;

@@ -83,12 +83,15 @@ Vec3f barycentric(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c
 }
 
 // Target t's phase at `time` and the field to ask there (the rest field, or the skinned look posed at that time).
+// No pointer into itself (it is moved into a vector): field() picks the posed field or the phase's.
 struct PosedLook {
   const LiquidLooks::Phase* phase = nullptr;
-  const sampling::MeshField* field = nullptr;
   std::optional<sampling::MeshField> posed;  // a skinned phase's moved field
   std::vector<Vec3f> vertices;               // ... and its look's vertices posed (empty: the look's own)
   Eigen::Affine3f rest = Eigen::Affine3f::Identity();
+  const sampling::MeshField* field() const {
+    return posed ? &*posed : phase != nullptr ? &*phase->field : nullptr;
+  }
 };
 
 PosedLook pose_look(const LiquidLooks::Target& t, double time) {
@@ -97,7 +100,6 @@ PosedLook pose_look(const LiquidLooks::Target& t, double time) {
   std::size_t k = 0;
   while (k + 1 < t.phases.size() && time >= t.phases[k + 1].from) ++k;
   out.phase = &t.phases[k];
-  out.field = &*out.phase->field;
   if (t.motion.moving()) out.rest = t.motion.at(time).rest_from_world();
   if (k == 0 && t.skin && t.skin_mesh != nullptr && !out.phase->skin_vertex.empty()) {
     const pose::PosedJoints joints = pose::joints_at(*t.skin, time, t.skin->spec.skinning);
@@ -106,14 +108,14 @@ PosedLook pose_look(const LiquidLooks::Target& t, double time) {
     for (std::size_t i = 0; i < x.size(); ++i)
       x[i] = joints.apply(t.skin->skin.joints[sv[i]], t.skin->skin.weights[sv[i]], t.skin_mesh->vertices[sv[i]]);
     auto moved = out.phase->field->moved(x, false);
-    if (moved) out.posed = std::move(*moved), out.field = &*out.posed, out.vertices = std::move(x);
+    if (moved) out.posed = std::move(*moved), out.vertices = std::move(x);
   }
   return out;
 }
 
 // The colour of the look's surface nearest to q (the vertex in the target's rest frame), and its distance.
 Vec3f look_colour(const PosedLook& p, const Vec3f& q, float* distance = nullptr) {
-  const auto c = p.field->closest(q);
+  const auto c = p.field()->closest(q);
   if (distance != nullptr) *distance = c.distance;
   const auto& tri = p.phase->look.mesh.triangles[c.triangle];
   const std::vector<Vec3f>& x = p.vertices.empty() ? p.phase->look.mesh.vertices : p.vertices;
@@ -195,13 +197,13 @@ std::vector<Vec3f> liquid_colours(const LiquidLooks& looks, const io::TriangleMe
   const auto colour_of = [&](std::size_t t, const Vec3f& p, float* distance) -> Vec3f {
     const LiquidLooks::Target& target = looks.targets[t];
     if (target.appearance == scene::Appearance::Water) return Vec3f::Ones();
-    if (target.appearance == scene::Appearance::Tint || posed[t].field == nullptr) return target.tint;
+    if (target.appearance == scene::Appearance::Tint || posed[t].field() == nullptr) return target.tint;
     return look_colour(posed[t], posed[t].rest * p, distance);
   };
   core::parallel_for(static_cast<std::int64_t>(out.size()), [&](std::int64_t i) {
     const auto v = static_cast<std::size_t>(i);
     const Vec3f& p = mesh.vertices[v];
-    std::size_t t = vertex_target.empty() ? 0 : vertex_target[v];
+    std::size_t t = vertex_target.size() != out.size() ? 0 : vertex_target[v];
     if (t < n) {
       out[v] = colour_of(t, p, nullptr);
       return;
@@ -211,7 +213,7 @@ std::vector<Vec3f> liquid_colours(const LiquidLooks& looks, const io::TriangleMe
     float best = std::numeric_limits<float>::infinity();
     out[v] = colour_of(0, p, nullptr);
     for (std::size_t k = 0; k < n; ++k) {
-      if (posed[k].field == nullptr || looks.targets[k].appearance != scene::Appearance::Target) continue;
+      if (posed[k].field() == nullptr || looks.targets[k].appearance != scene::Appearance::Target) continue;
       float dist = 0.0f;
       const Vec3f c = look_colour(posed[k], posed[k].rest * p, &dist);
       if (dist < best) best = dist, out[v] = c;

@@ -208,7 +208,7 @@ json page_targets(const json& report, io::TriangleMesh& merged, json& warnings) 
 }
 
 // final.obj's vertex colours (`v x y z r g b`, sRGB; a run whose liquid is not water writes them), through Assimp
-// (io/target_look.h reads vertex colours): `mesh` takes them when the two agree vertex for vertex.
+// (io/target_look.h reads vertex colours, to linear): `mesh` takes them when the two agree vertex for vertex.
 void final_colours(const fs::path& final, io::TriangleMesh& mesh) {
   std::ifstream in(final);
   std::string line;
@@ -219,11 +219,8 @@ void final_colours(const fs::path& final, io::TriangleMesh& mesh) {
   if (!look || look->colours.size() != look->mesh.vertices.size() || look->mesh.vertices.size() != mesh.vertices.size()) return;
   const core::PointTree tree(look->mesh.vertices);
   mesh.colours.resize(mesh.vertices.size());
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Vec3f& c = look->colours[tree.original(tree.nearest(mesh.vertices[v]).slot)];
-    const auto lin = [](float s) { return io::srgb_to_linear(static_cast<std::uint8_t>(std::lround(std::clamp(s, 0.0f, 1.0f) * 255.0f))); };
-    mesh.colours[v] = Vec3f(lin(c.x()), lin(c.y()), lin(c.z()));
-  }
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)  // linear already (an OBJ's colours are read as sRGB)
+    mesh.colours[v] = look->colours[tree.original(tree.nearest(mesh.vertices[v]).slot)];
 }
 
 // The final mesh (decimated for the page), when the run made one.

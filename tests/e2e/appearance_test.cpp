@@ -184,6 +184,33 @@ TEST(Appearance, AMovingDuckIsColouredInItsPose) {
   expect_beak_and_tail(m, Vec3f(std::cos(a), 0.0f, -std::sin(a)));  // R_y(60°) · x
 }
 
+// A skinned character with "appearance": "target": its look is posed with the skin at each meshed frame, and rigged.glb
+// carries the colours (validator-clean, three.js shows them): the character's one material colour.
+TEST(Appearance, ASkinnedCharactersRiggedGlbWearsItsLook) {
+  const fs::path character = test::source_dir() / "examples" / "generated" / "character.glb";
+  ASSERT_TRUE(fs::exists(character)) << "run scripts/setup (it writes examples/generated/character.glb)";
+  const fs::path dir = test::temp_dir("appearance-skinned");
+  e2e::write_scene(dir, R"({"targets": [{"mesh": ")" + character.string() +
+                            R"(", "appearance": "target", "animation": {"clip": "walk"}}], "sampling": {"auto_count": 3000}})");
+  const auto r = e2e::run({"run", (dir / "scene.json").string(), "-o", (dir / "out").string(), "--frames", "40",
+                           "--mesh-every", "20", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto [rc, out] = test::shell("node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
+                                     (dir / "out" / "rigged.glb").string() + "' 2>&1");
+  ASSERT_EQ(rc, 0) << out;
+  const auto j = nlohmann::json::parse(out, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << out;
+  EXPECT_EQ(j["errors"], 0) << out;
+  EXPECT_TRUE(j["three"]["vertex_colours"].get<bool>()) << out;
+  ASSERT_TRUE(j["three"]["colours_last"].is_array()) << out;
+  // The same colours as final.obj's (sRGB there, linear here).
+  const ColouredMesh m = read_coloured_obj(dir / "out" / "mesh" / "final.obj");
+  ASSERT_FALSE(m.positions.empty());
+  double mean = 0.0;
+  for (const auto& c : m.srgb) mean += io::srgb_to_linear(std::uint8_t(c[2]));
+  EXPECT_NEAR(j["three"]["colours_last"][2].get<double>(), mean / double(m.srgb.size()), 0.02) << out;
+}
+
 TEST(Appearance, AMissingTextureWarnsAndTheRunGoesOn) {
   const fs::path dir = test::temp_dir("appearance-missing");
   fs::copy_file(kDuck, dir / "duck.dae", fs::copy_options::overwrite_existing);

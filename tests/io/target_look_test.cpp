@@ -87,12 +87,12 @@ TEST(TargetLook, ABrokenTextureWarnsAndTheMaterialColourIsUsed) {
 }
 
 TEST(TargetLook, VertexColoursAreInterpolated) {
-  // A PLY tetrahedron with a red, a green, a blue and a white corner.
+  // A PLY tetrahedron with a red, a green, a blue and a grey corner (PLY colours are sRGB: 128 is 0.2158 linear).
   const fs::path dir = test::temp_dir("look-ply");
   std::ofstream(dir / "tet.ply") << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                                     "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
                                     "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
-                                    "0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 255 255 255\n"
+                                    "0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 128 128 128\n"
                                     "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
   auto look = load_target_look(dir / "tet.ply");
   ASSERT_TRUE(look.has_value()) << look.error().message;
@@ -104,7 +104,7 @@ TEST(TargetLook, VertexColoursAreInterpolated) {
       const Vec3f want = p == Vec3f(0, 0, 0)   ? Vec3f(1, 0, 0)
                          : p == Vec3f(1, 0, 0) ? Vec3f(0, 1, 0)
                          : p == Vec3f(0, 1, 0) ? Vec3f(0, 0, 1)
-                                               : Vec3f(1, 1, 1);
+                                               : Vec3f::Constant(0.2158f);
       EXPECT_TRUE(look->colour_at(t, Vec3f::Unit(c)).isApprox(want, 1e-3f)) << t << " " << c;
     }
 }
