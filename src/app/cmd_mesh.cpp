@@ -30,6 +30,9 @@ int run_mesh(MeshCli& o) {
   if (!frames) return fail(frames.error());
   // A run's output folder: its targets' water tints from the run's report (one material per target in the GLB).
   o.mesh.target_tints = pipeline::run_target_tints(o.input);
+  // ... and their looks (targets[].appearance), read again from the targets' files.
+  const auto looks = pipeline::run_target_looks(o.input);
+  if (looks) o.mesh.looks = &looks->looks;
   spdlog::info("mesh: {} particle frame(s) from {} -> {}", frames->size(), o.input.string(), o.out.string());
   ProgressBar bar(stderr);
   auto sum = pipeline::export_meshes(*frames, o.out, o.mesh, bar);

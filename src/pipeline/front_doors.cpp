@@ -10,10 +10,12 @@
 #include "metrics/report.h"
 #include "pipeline/mesh_export.h"
 #include "sampling/control_io.h"
+#include "scene/scene.h"
 #include "surface/reconstruct.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
@@ -124,6 +126,32 @@ std::vector<Vec3f> run_target_tints(const fs::path& run_dir) {
       tints.push_back(tint);
     }
   return tints;
+}
+
+std::unique_ptr<RunLooks> run_target_looks(const fs::path& run_dir) {
+  std::error_code ec;
+  if (!fs::is_regular_file(run_dir / "report.json", ec)) return nullptr;
+  std::ifstream in(run_dir / "report.json");
+  const auto report = json::parse(in, nullptr, false);
+  if (!report.is_object() || !report.contains("scene")) return nullptr;
+  auto scene = scene::parse_scene(report["scene"].dump(), "/", "report.json's scene");
+  if (!scene) return nullptr;
+  bool any = false;
+  for (const auto& t : scene->targets) any |= t.appearance != scene::Appearance::Water;
+  if (!any) return nullptr;
+  auto geometry = load_target_meshes(*scene);
+  if (!geometry) {
+    spdlog::warn("mesh: the targets' looks are not used: {}", geometry.error().message);
+    return nullptr;
+  }
+  auto out = std::make_unique<RunLooks>();
+  out->geometry = std::move(*geometry);
+  std::vector<pose::TargetMotion> motions;  // as the run posed them: about each target's box centre
+  for (std::size_t t = 0; t < scene->targets.size(); ++t)
+    motions.push_back({scene->targets[t].keyframes, scene->targets[t].smooth(),
+                       0.5f * (out->geometry[t].box.min + out->geometry[t].box.max)});
+  out->looks = load_liquid_looks(*scene, out->geometry, motions);
+  return out;
 }
 
 Result<RunRecording> open_run(const fs::path& out) {

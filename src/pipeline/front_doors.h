@@ -8,6 +8,8 @@
 #include "core/progress.h"
 #include "core/types.h"
 #include "io/triangle_mesh.h"
+#include "pipeline/auto_scene.h"
+#include "pipeline/liquid_look.h"
 #include "metrics/shape_metrics.h"
 #include "sampling/control_set.h"
 #include "sampling/samplers.h"
@@ -16,6 +18,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -78,6 +81,15 @@ bool is_controller(std::string_view name);
 /// is ours, but may be edited): a target without a readable tint keeps the default, so target k always gets material
 /// k; values are clamped to [0, 1].
 std::vector<Vec3f> run_target_tints(const std::filesystem::path& run_dir);
+
+/// The targets' looks of the run in `run_dir` (its report.json's scene), for `fluidform mesh` on a run's folder: null
+/// when no target's appearance is tint or target, or when the report or a target cannot be read (then with one warning:
+/// the meshes take the water material and the tints).
+struct RunLooks {
+  std::vector<TargetGeometry> geometry;  ///< the skins and meshes `looks` points into
+  LiquidLooks looks;
+};
+std::unique_ptr<RunLooks> run_target_looks(const std::filesystem::path& run_dir);
 
 /// What the viewer plays back from a run's folder: its particle frames, and per frame the error rate and sub-step
 /// time from metrics.csv (NaN / 0 when unknown), the frame rate from report.json.

@@ -124,6 +124,13 @@ TEST(Appearance, TheFormedDuckWearsItsTextureAtTheNearestPoint) {
   // And where a person looks: the duck faces +x.
   expect_beak_and_tail(m, Vec3f::UnitX());
 
+  // `fluidform mesh` on the run's folder reads the looks again from report.json's scene: the same colours.
+  const auto again = e2e::run({"mesh", (dir / "out").string(), "-o", (dir / "again").string(), "--final-only", "-q"});
+  ASSERT_EQ(again.code, 0) << again.err;
+  const ColouredMesh m2 = read_coloured_obj(dir / "again" / "mesh" / "final.obj");
+  ASSERT_EQ(m2.positions.size(), m.positions.size());
+  EXPECT_EQ(m2.srgb, m.srgb);
+
   // The GLB: validator-clean, and three.js shows a yellow liquid.
   const std::string cmd = "node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
                           (dir / "out" / "animation.glb").string() + "' 2>&1";
