@@ -194,24 +194,24 @@ std::vector<Vec3f> liquid_colours(const LiquidLooks& looks, const io::TriangleMe
   std::vector<PosedLook> posed;
   posed.reserve(n);
   for (const auto& t : looks.targets) posed.push_back(pose_look(t, time));
-  const auto colour_of = [&](std::size_t t, const Vec3f& p, float* distance) -> Vec3f {
+  const auto colour_of = [&](std::size_t t, const Vec3f& p) -> Vec3f {
     const LiquidLooks::Target& target = looks.targets[t];
     if (target.appearance == scene::Appearance::Water) return Vec3f::Ones();
     if (target.appearance == scene::Appearance::Tint || posed[t].field() == nullptr) return target.tint;
-    return look_colour(posed[t], posed[t].rest * p, distance);
+    return look_colour(posed[t], posed[t].rest * p);
   };
   core::parallel_for(static_cast<std::int64_t>(out.size()), [&](std::int64_t i) {
     const auto v = static_cast<std::size_t>(i);
     const Vec3f& p = mesh.vertices[v];
     std::size_t t = vertex_target.size() != out.size() ? 0 : vertex_target[v];
     if (t < n) {
-      out[v] = colour_of(t, p, nullptr);
+      out[v] = colour_of(t, p);
       return;
     }
     // Free fluid: the target whose look's surface is nearest; targets without a look (water, tint) only when no
     // target has one.
     float best = std::numeric_limits<float>::infinity();
-    out[v] = colour_of(0, p, nullptr);
+    out[v] = colour_of(0, p);
     for (std::size_t k = 0; k < n; ++k) {
       if (posed[k].field() == nullptr || looks.targets[k].appearance != scene::Appearance::Target) continue;
       float dist = 0.0f;

@@ -98,6 +98,18 @@ void expect_beak_and_tail(const ColouredMesh& m, const Vec3f& facing) {
   EXPECT_GT(green_over_red(order.size() - one, order.size()), 0.75) << "the tail is yellow";
 }
 
+// scripts/check_glb.mjs on `glb` (the Khronos validator and three.js): no errors, and three.js shows vertex colours.
+void check_coloured_glb(const fs::path& glb, nlohmann::json& j) {
+  const auto [rc, out] = test::shell("node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
+                                     glb.string() + "' 2>&1");
+  ASSERT_EQ(rc, 0) << out;
+  j = nlohmann::json::parse(out, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << out;
+  EXPECT_EQ(j["errors"], 0) << out;
+  EXPECT_TRUE(j["three"]["vertex_colours"].get<bool>()) << out;
+  ASSERT_TRUE(j["three"]["colours_last"].is_array()) << out;
+}
+
 std::string duck_scene(const fs::path& mesh) {
   return R"({"targets": [{"mesh": ")" + mesh.string() +
          R"(", "appearance": "target"}], "sampling": {"auto_count": 3000, "max_auto_count": 3000}})";
@@ -132,15 +144,9 @@ TEST(Appearance, TheFormedDuckWearsItsTextureAtTheNearestPoint) {
   EXPECT_EQ(m2.srgb, m.srgb);
 
   // The GLB: validator-clean, and three.js shows a yellow liquid.
-  const std::string cmd = "node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
-                          (dir / "out" / "animation.glb").string() + "' 2>&1";
-  const auto [rc, out] = test::shell(cmd);
-  ASSERT_EQ(rc, 0) << out;
-  const auto j = nlohmann::json::parse(out, nullptr, false);
-  ASSERT_FALSE(j.is_discarded()) << out;
-  EXPECT_EQ(j["errors"], 0) << out;
-  EXPECT_TRUE(j["three"]["vertex_colours"].get<bool>()) << out;
-  ASSERT_TRUE(j["three"]["colours_last"].is_array()) << out;
+  nlohmann::json j;
+  ASSERT_NO_FATAL_FAILURE(check_coloured_glb(dir / "out" / "animation.glb", j));
+  const std::string out = j.dump();
   EXPECT_GT(j["three"]["colours_last"][0].get<double>(), 0.5) << out;
   EXPECT_LT(j["three"]["colours_last"][2].get<double>(), 0.1) << out;
 }
@@ -202,14 +208,9 @@ TEST(Appearance, ASkinnedCharactersRiggedGlbWearsItsLook) {
   const auto r = e2e::run({"run", (dir / "scene.json").string(), "-o", (dir / "out").string(), "--frames", "40",
                            "--mesh-every", "20", "-q"});
   ASSERT_EQ(r.code, 0) << r.err;
-  const auto [rc, out] = test::shell("node '" + (test::source_dir() / "scripts" / "check_glb.mjs").string() + "' '" +
-                                     (dir / "out" / "rigged.glb").string() + "' 2>&1");
-  ASSERT_EQ(rc, 0) << out;
-  const auto j = nlohmann::json::parse(out, nullptr, false);
-  ASSERT_FALSE(j.is_discarded()) << out;
-  EXPECT_EQ(j["errors"], 0) << out;
-  EXPECT_TRUE(j["three"]["vertex_colours"].get<bool>()) << out;
-  ASSERT_TRUE(j["three"]["colours_last"].is_array()) << out;
+  nlohmann::json j;
+  ASSERT_NO_FATAL_FAILURE(check_coloured_glb(dir / "out" / "rigged.glb", j));
+  const std::string out = j.dump();
   // The same colours as final.obj's (sRGB there, linear here).
   const ColouredMesh m = read_coloured_obj(dir / "out" / "mesh" / "final.obj");
   ASSERT_FALSE(m.positions.empty());
