@@ -12,7 +12,9 @@
 //   UVs              the same points with UVs instead: each corner takes the UV of its nearest target point and the
 //                    point the texture at the interpolated UV; counted apart are the triangles whose corners land in
 //                    different UV charts of the target (across a seam: there interpolated UVs sweep the texture
-//                    between the charts, the smear a UV mapping of a new surface cannot avoid).
+//                    between the charts, the smear a UV mapping of a new surface cannot avoid);
+//   UVs as written   when final.obj has UVs (fluidform chose them): the same points through the OBJ's own vt, seams
+//                    handled as pipeline/liquid_look.h does (the UV map of one target triangle across a seam).
 #include "io/target_look.h"
 #include "sampling/mesh_field.h"
 #include "scene/scene.h"
@@ -37,6 +39,7 @@ using namespace ff;
 struct Formed {
   std::vector<Vec3f> positions;
   std::vector<Vec3f> srgb;  // 0–255
+  std::vector<Eigen::Vector2f> uv;  // the OBJ's vt (one per vertex, as fluidform writes them), when it has them
   std::vector<std::array<Index, 3>> triangles;
 };
 
@@ -49,10 +52,14 @@ Formed read_obj(const fs::path& file) {
     unsigned a, bb, c;
     if (std::sscanf(line.c_str(), "v %f %f %f %f %f %f", &x, &y, &z, &r, &g, &b) == 6) {
       m.positions.emplace_back(x, y, z), m.srgb.emplace_back(255 * r, 255 * g, 255 * b);
-    } else if (std::sscanf(line.c_str(), "f %u//%*u %u//%*u %u//%*u", &a, &bb, &c) == 3) {
+    } else if (std::sscanf(line.c_str(), "vt %f %f", &x, &y) == 2) {
+      m.uv.emplace_back(x, y);
+    } else if (std::sscanf(line.c_str(), "f %u/%*u/%*u %u/%*u/%*u %u/%*u/%*u", &a, &bb, &c) == 3 ||
+               std::sscanf(line.c_str(), "f %u//%*u %u//%*u %u//%*u", &a, &bb, &c) == 3) {
       m.triangles.push_back({a - 1, bb - 1, c - 1});
     }
   }
+  if (m.uv.size() != m.positions.size()) m.uv.clear();
   return m;
 }
 
@@ -130,7 +137,7 @@ int main(int argc, char** argv) {
   const std::vector<Index> chart = charts(*look);
   const bool uv = !look->uv.empty();
 
-  Stat at_vertices, vertex_colours, uv_all, uv_one_chart;
+  Stat at_vertices, vertex_colours, uv_all, uv_one_chart, uv_written;
   std::vector<Near> corner(m.positions.size());
   for (std::size_t v = 0; v < m.positions.size(); ++v) {
     corner[v] = nearest(*look, *field, m.positions[v]);
@@ -167,16 +174,20 @@ int main(int argc, char** argv) {
       at += w[c] * (n.bary.x() * look->uv[lt[0]] + n.bary.y() * look->uv[lt[1]] + n.bary.z() * look->uv[lt[2]]);
       one_chart &= chart[n.triangle] == chart[corner[f[0]].triangle];
     }
-    // The texture at that UV, through a one-triangle look whose corners all carry it.
-    io::TargetLook probe;
-    probe.mesh.vertices = {Vec3f::Zero(), Vec3f::Zero(), Vec3f::Zero()};
-    probe.mesh.triangles = {{0, 1, 2}};
-    probe.uv = {at, at, at};
-    probe.material = {0};
-    probe.materials = {look->materials[look->material[q.triangle]]};
-    if (probe.materials[0].texture >= 0) probe.textures = {look->textures[std::size_t(probe.materials[0].texture)]}, probe.materials[0].texture = 0;
-    const Vec3f by_uv = to_srgb(probe.colour_at(0, Vec3f(1, 0, 0)));
+    // The texture at a UV, through a one-triangle look whose corners all carry it.
+    const auto texture_at = [&](const Eigen::Vector2f& at_uv) {
+      io::TargetLook probe;
+      probe.mesh.vertices = {Vec3f::Zero(), Vec3f::Zero(), Vec3f::Zero()};
+      probe.mesh.triangles = {{0, 1, 2}};
+      probe.uv = {at_uv, at_uv, at_uv};
+      probe.material = {0};
+      probe.materials = {look->materials[look->material[q.triangle]]};
+      if (probe.materials[0].texture >= 0) probe.textures = {look->textures[std::size_t(probe.materials[0].texture)]}, probe.materials[0].texture = 0;
+      return to_srgb(probe.colour_at(0, Vec3f(1, 0, 0)));
+    };
+    const Vec3f by_uv = texture_at(at);
     uv_all.add(by_uv, truth);
+    if (!m.uv.empty()) uv_written.add(texture_at(w.x() * m.uv[f[0]] + w.y() * m.uv[f[1]] + w.z() * m.uv[f[2]]), truth);
     if (one_chart) uv_one_chart.add(by_uv, truth);
     straddling += !one_chart;
   }
@@ -193,6 +204,7 @@ int main(int argc, char** argv) {
   std::printf("%s\n%s\n", at_vertices.row("at the vertices (as written)").c_str(), vertex_colours.row("vertex colours, inside triangles").c_str());
   if (uv) {
     std::printf("%s\n%s\n", uv_all.row("UVs, inside triangles").c_str(), uv_one_chart.row("UVs, triangles within one chart").c_str());
+    if (!m.uv.empty()) std::printf("%s\n", uv_written.row("UVs as written (the OBJ's vt)").c_str());
     std::printf("\n%.2f %% of the sampled points lie in formed triangles across a UV seam of the target\n",
                 100.0 * double(straddling) / double(std::max<std::size_t>(samples, 1)));
   }

@@ -2,12 +2,22 @@
 // GLTFLoader (the loader of the WebXR viewer). Prints one JSON line:
 //   {"errors", "warnings", "messages": [first issues], "three": {"meshes", "nodes", "clips", "duration",
 //    "vertices_last", "box_last": [min, max] of the last frame's world-space positions, "colours_last": the mean of its
-//    vertex colours (null: none), "vertex_colours": whether its material shows them,
+//    vertex colours (null: none), "vertex_colours": whether its material shows them, "texture_last": its material's
+//    texture {width, height, uvs} (null: none),
 //    "material": the last frame's material as three.js made it: type, transmission, ior, thickness, attenuation}}
 // and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
 import { validate_glb } from './glb_report.mjs';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+
+// Node has no image decoder: an embedded texture (the liquid in its target's texture) is handed to three.js as a
+// bitmap of the PNG's size with no pixels, so the loader wires the material's map as a browser would.
+globalThis.self ??= globalThis;
+globalThis.createImageBitmap ??= async (blob) => {
+  const b = new DataView(await blob.arrayBuffer());
+  const png = b.byteLength > 24 && b.getUint32(0) === 0x89504e47;
+  return { width: png ? b.getUint32(16) : 1, height: png ? b.getUint32(20) : 1, close() {} };
+};
 
 const file = process.argv[2];
 if (!file) {
@@ -53,6 +63,11 @@ try {
         })
       : null,
     vertex_colours: last ? !!last.material.vertexColors : false,
+    // The last frame's texture (the liquid in its target's texture): the image's size and the UV attribute's count.
+    texture_last: last && last.material.map
+      ? { width: last.material.map.image.width, height: last.material.map.image.height,
+          uvs: last.geometry.attributes.uv ? last.geometry.attributes.uv.count : 0 }
+      : null,
     material: last
       ? {
           type: last.material.type,

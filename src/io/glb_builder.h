@@ -117,6 +117,42 @@ inline json water_material(const WaterMaterial& w, const Aabb& box, bool quantiz
              {{"thicknessFactor", thickness}, {"attenuationDistance", distance}, {"attenuationColor", {w.tint.x(), w.tint.y(), w.tint.z()}}}}}}};
 }
 
+/// A mesh with per-vertex UVs made from one with per-corner UVs (TriangleMesh::corner_uv): a vertex is split where its
+/// corners carry different UVs (across a seam of the target's texture), and only there. `source`: per vertex of
+/// `mesh`, the vertex of the input it copies (its colours are carried; normals are the caller's, through `source`).
+struct UvSplit {
+  TriangleMesh mesh;
+  std::vector<Vec2f> uv;
+  std::vector<Index> source;
+};
+UvSplit split_uv(const TriangleMesh& m);
+
+/// Whether `m` is to be written with its texture: UVs for every triangle and an image to index.
+inline bool textured(const TriangleMesh& m) {
+  return m.texture != nullptr && m.texture->image.width > 0 && !m.corner_uv.empty() && m.corner_uv.size() == m.triangles.size();
+}
+
+/// TEXCOORD_0 of a split mesh: floats, glTF's convention (origin top-left: v flipped from OpenGL's).
+inline int uv_accessor(GlbBuilder& b, const std::vector<Vec2f>& uv) {
+  std::vector<float> t(2 * uv.size());
+  for (std::size_t i = 0; i < uv.size(); ++i) t[2 * i] = uv[i].x(), t[2 * i + 1] = 1.0f - uv[i].y();
+  return b.accessor(b.view(t.data(), t.size() * 4, kArrayBuffer), kFloat, uv.size(), "VEC2");
+}
+
+/// The texture as glTF's "images" (a PNG in the binary chunk), "textures" and "samplers" entries (bilinear,
+/// mipmapped, repeating: the sampler the colours were measured with); returns the texture's index.
+Result<int> add_texture(GlbBuilder& b, json& doc, const MeshTexture& t);
+
+/// The opaque liquid in its target's texture: baseColorTexture `texture` times the texture's factor.
+inline json textured_material(const MeshTexture& t, int texture, const std::string& name = "liquid_textured") {
+  return {{"name", name},
+          {"pbrMetallicRoughness",
+           {{"baseColorFactor", {t.factor.x(), t.factor.y(), t.factor.z(), 1.0}},
+            {"baseColorTexture", {{"index", texture}}},
+            {"metallicFactor", 0.0},
+            {"roughnessFactor", kColouredRoughness}}}};
+}
+
 /// The extensions water_material uses (for "extensionsUsed").
 inline json water_extensions() { return {"KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"}; }
 

@@ -299,7 +299,8 @@ bool decode_look(AnswerReader& in, TargetLook& l) {
   return true;
 }
 
-// Bilinear, wrapping (glTF's default sampler), in linear light.
+}  // namespace
+
 Vec3f sample_texture(const Texture& t, Vec2f uv) {
   const float u = uv.x() - std::floor(uv.x()), v = uv.y() - std::floor(uv.y());
   const float x = u * float(t.width) - 0.5f, y = (1.0f - v) * float(t.height) - 0.5f;  // UV origin bottom-left
@@ -317,7 +318,6 @@ Vec3f sample_texture(const Texture& t, Vec2f uv) {
   return out;
 }
 
-}  // namespace
 
 float srgb_to_linear(std::uint8_t c) {
   static const std::array<float, 256> table = [] {

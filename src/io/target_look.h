@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "core/types.h"
 #include "io/load_mesh.h"
+#include "io/texture.h"
 #include "io/triangle_mesh.h"
 
 #include <cstdint>
@@ -26,14 +27,6 @@
 #include <vector>
 
 namespace ff::io {
-
-using Vec2f = Eigen::Vector2f;
-
-/// A decoded texture: 8-bit sRGB, rows from the top.
-struct Texture {
-  int width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;  ///< width × height × 3
-};
 
 struct LookMaterial {
   Vec3f colour{0.8f, 0.8f, 0.8f};  ///< linear RGB: the base (or diffuse) colour

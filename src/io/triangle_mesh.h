@@ -1,8 +1,10 @@
 #pragma once
 // The mesh type handed between stages (docs/ARCHITECTURE.md "Data between stages").
 #include "core/types.h"
+#include "io/texture.h"
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace ff::io {
@@ -12,6 +14,11 @@ struct TriangleMesh {
   std::vector<std::array<Index, 3>> triangles;  ///< counter-clockwise seen from outside (when the source is)
   /// Per vertex, linear RGB in [0, 1] (the liquid's look, pipeline/liquid_look.h); empty: the mesh has no colours.
   std::vector<Vec3f> colours;
+  /// Per triangle, the UVs of its three corners into `texture` (the liquid wears its target's texture, pipeline/
+  /// liquid_look.h); empty: none. Per corner, not per vertex: a triangle across a UV seam of the target takes its own
+  /// UVs, so the writers split vertices only there (the mesh itself stays welded: watertight, one vertex per point).
+  std::vector<std::array<Vec2f, 3>> corner_uv;
+  std::shared_ptr<const MeshTexture> texture;  ///< what corner_uv index (shared by every frame of a run)
 
   Aabb bounds() const {
     Aabb b;

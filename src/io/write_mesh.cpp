@@ -2,6 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/glb_builder.h"
+#include "io/picture.h"
 #include "io/target_look.h"
 
 #include <Eigen/Geometry>  // cross product
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 
 namespace ff::io {
 namespace {
@@ -28,6 +30,58 @@ std::int8_t snorm8(float v) { return static_cast<std::int8_t>(std::lround(std::c
 
 }  // namespace
 
+namespace glb {
+
+UvSplit split_uv(const TriangleMesh& m) {
+  UvSplit out;
+  const std::size_t nv = m.vertices.size();
+  const bool colours = m.colours.size() == nv;
+  std::vector<Index> first(nv, kInvalidIndex);  // the copy of v with the UV it was first seen with
+  std::map<std::array<std::uint32_t, 3>, Index> more;  // (v, UV bits) → its copy, for v's other UVs (seams: few)
+  const auto add = [&](Index v, const Vec2f& uv) {
+    const auto id = static_cast<Index>(out.mesh.vertices.size());
+    out.mesh.vertices.push_back(m.vertices[v]);
+    if (colours) out.mesh.colours.push_back(m.colours[v]);
+    out.uv.push_back(uv);
+    out.source.push_back(v);
+    return id;
+  };
+  out.mesh.triangles.resize(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const Index v = m.triangles[t][std::size_t(c)];
+      const Vec2f& uv = m.corner_uv[t][std::size_t(c)];
+      Index& to = out.mesh.triangles[t][std::size_t(c)];
+      if (first[v] == kInvalidIndex) {
+        to = first[v] = add(v, uv);
+      } else if (out.uv[first[v]] == uv) {
+        to = first[v];
+      } else {
+        std::array<std::uint32_t, 3> key{v, 0, 0};
+        std::memcpy(&key[1], uv.data(), 8);
+        const auto [it, fresh] = more.try_emplace(key, 0);
+        if (fresh) it->second = add(v, uv);
+        to = it->second;
+      }
+    }
+  return out;
+}
+
+Result<int> add_texture(GlbBuilder& b, json& doc, const MeshTexture& t) {
+  Picture p;
+  p.width = t.image.width, p.height = t.image.height, p.rgb = t.image.rgb;
+  FF_TRY(const std::vector<std::uint8_t> png, encode_png(p));
+  for (const char* key : {"images", "textures", "samplers"})
+    if (!doc.contains(key)) doc[key] = json::array();
+  doc["images"].push_back({{"bufferView", b.view(png.data(), png.size())}, {"mimeType", "image/png"}});
+  if (doc["samplers"].empty())  // LINEAR, LINEAR_MIPMAP_LINEAR, REPEAT
+    doc["samplers"].push_back({{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}});
+  doc["textures"].push_back({{"sampler", 0}, {"source", doc["images"].size() - 1}});
+  return static_cast<int>(doc["textures"].size()) - 1;
+}
+
+}  // namespace glb
+
 std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh) {
   std::vector<Vec3f> n(mesh.vertices.size(), Vec3f::Zero());
   for (const auto& t : mesh.triangles) {
@@ -42,19 +96,32 @@ std::vector<Vec3f> vertex_normals(const TriangleMesh& mesh) {
   return n;
 }
 
-std::string encode_mtl(const WaterMaterial& m) {
+std::string encode_mtl(const WaterMaterial& m, std::string_view texture_file, const Vec3f& texture_factor) {
   const Vec3f c = m.tint;
   // illum 7: reflection and refraction (Fresnel); Tf 1 1 1: a clear body (Blender's OBJ importer takes the mean
   // of Tf as the Principled BSDF's transmission, so a tinted Tf would make it half opaque); the tint is Kd.
   // "liquid": the opaque look of a liquid with vertex colours (appearance tint or target), which multiply Kd.
-  return fmt::format("# fluidform water material\nnewmtl water\nKa 0 0 0\nKd {:.4f} {:.4f} {:.4f}\nKs 1 1 1\n"
-                     "Ns {:.1f}\nNi {:.3f}\nd 1\nTf 1 1 1\nillum 7\n"
-                     "\n# fluidform coloured liquid (its colours are the OBJ's vertex colours)\nnewmtl liquid\nKa 0 0 0\n"
-                     "Kd 1 1 1\nKs 0.5 0.5 0.5\nNs {:.1f}\nd 1\nillum 2\n",
-                     c.x(), c.y(), c.z(), 1000.0f * (1.0f - m.roughness), m.ior, 1000.0f * (1.0f - kColouredRoughness));
+  std::string s = fmt::format(
+      "# fluidform water material\nnewmtl water\nKa 0 0 0\nKd {:.4f} {:.4f} {:.4f}\nKs 1 1 1\n"
+      "Ns {:.1f}\nNi {:.3f}\nd 1\nTf 1 1 1\nillum 7\n"
+      "\n# fluidform coloured liquid (its colours are the OBJ's vertex colours)\nnewmtl liquid\nKa 0 0 0\n"
+      "Kd 1 1 1\nKs 0.5 0.5 0.5\nNs {:.1f}\nd 1\nillum 2\n",
+      c.x(), c.y(), c.z(), 1000.0f * (1.0f - m.roughness), m.ior, 1000.0f * (1.0f - kColouredRoughness));
+  if (!texture_file.empty())
+    s += fmt::format("\n# fluidform liquid in its target's texture (the OBJ's vt)\nnewmtl liquid_textured\nKa 0 0 0\n"
+                     "Kd {:.4f} {:.4f} {:.4f}\nKs 0.5 0.5 0.5\nNs {:.1f}\nd 1\nillum 2\nmap_Kd {}\n",
+                     texture_factor.x(), texture_factor.y(), texture_factor.z(), 1000.0f * (1.0f - kColouredRoughness),
+                     texture_file);
+  return s;
 }
 
-std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view comment, std::string_view mtllib) {
+std::string encode_obj(const TriangleMesh& input, bool normals, std::string_view comment, std::string_view mtllib) {
+  // A textured mesh is written split at its UV seams (vt is per vertex here); normals are the welded mesh's, so a
+  // seam is not a crease.
+  const bool uv = glb::textured(input);
+  glb::UvSplit split;
+  if (uv) split = glb::split_uv(input);
+  const TriangleMesh& mesh = uv ? split.mesh : input;
   std::string s;
   s.reserve(mesh.vertices.size() * (normals ? 64 : 32) + mesh.triangles.size() * 40);
   for (std::size_t a = 0, b; a <= comment.size(); a = b + 1) {
@@ -64,7 +131,8 @@ std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view 
   }
   s += fmt::format("# {} vertices, {} triangles; Y up, metres\n", mesh.vertices.size(), mesh.triangles.size());
   // 9 significant digits round-trip a float exactly.
-  // Vertex colours as `v x y z r g b` (sRGB, as MeshLab, three.js's OBJLoader and Blender ≥ 3.5 read them).
+  // Vertex colours as `v x y z r g b` (sRGB, as MeshLab, three.js's OBJLoader and Blender ≥ 3.5 read them); a
+  // textured mesh keeps them too (the material shows the texture; tools without textures can show these).
   const bool coloured = !mesh.colours.empty() && mesh.colours.size() == mesh.vertices.size();
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Vec3f& v = mesh.vertices[i];
@@ -76,20 +144,45 @@ std::string encode_obj(const TriangleMesh& mesh, bool normals, std::string_view 
       s += fmt::format("v {:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
     }
   }
-  if (normals)
-    for (const auto& n : vertex_normals(mesh)) s += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", n.x(), n.y(), n.z());
-  if (!mtllib.empty()) s += fmt::format("mtllib {}\nusemtl {}\n", mtllib, coloured ? "liquid" : "water");
+  if (uv)
+    for (const Vec2f& t : split.uv) s += fmt::format("vt {:.7g} {:.7g}\n", t.x(), t.y());
+  if (normals) {
+    const std::vector<Vec3f> n = vertex_normals(input);
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Vec3f& v = n[uv ? split.source[i] : i];
+      s += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", v.x(), v.y(), v.z());
+    }
+  }
+  if (!mtllib.empty()) s += fmt::format("mtllib {}\nusemtl {}\n", mtllib, uv ? "liquid_textured" : coloured ? "liquid" : "water");
   for (const auto& t : mesh.triangles) {
-    if (normals)
+    if (normals && uv)
+      s += fmt::format("f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    else if (normals)
       s += fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    else if (uv)
+      s += fmt::format("f {0}/{0} {1}/{1} {2}/{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
     else
       s += fmt::format("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
   }
   return s;
 }
 
+Status check_uv(const TriangleMesh& m, std::string_view what) {
+  if (m.corner_uv.empty()) return {};
+  if (m.corner_uv.size() != m.triangles.size())
+    return input_error(fmt::format("{}: UVs for {} triangles of {}", what, m.corner_uv.size(), m.triangles.size()));
+  if (m.texture == nullptr || m.texture->image.width <= 0 || m.texture->image.height <= 0 ||
+      m.texture->image.rgb.size() != std::size_t(m.texture->image.width) * std::size_t(m.texture->image.height) * 3)
+    return input_error(fmt::format("{}: UVs without a texture to index", what));
+  for (const auto& c : m.corner_uv)
+    for (const Vec2f& t : c)
+      if (!t.allFinite()) return input_error(fmt::format("{}: a UV is not finite", what));
+  return {};
+}
+
 Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals, std::string_view comment,
                  std::string_view mtllib) {
+  FF_CHECK(check_uv(mesh, path.string()));
   for (const auto& t : mesh.triangles)
     for (Index v : t)
       if (v >= mesh.vertices.size())
@@ -121,6 +214,7 @@ namespace {
 Status check_glb_frame(const TriangleMesh& m, std::size_t k) {
   if (!m.colours.empty() && m.colours.size() != m.vertices.size())
     return input_error(fmt::format("glb: frame {} has {} vertex colours for {} vertices", k, m.colours.size(), m.vertices.size()));
+  FF_CHECK(check_uv(m, fmt::format("glb: frame {}", k)));
   for (const auto& t : m.triangles)
     for (Index v : t)
       if (v >= m.vertices.size())
@@ -237,6 +331,70 @@ bool any_water(const GlbOptions& o) {
   return std::any_of(o.materials.begin(), o.materials.end(), [](const WaterMaterial& w) { return !w.coloured; });
 }
 
+// The frames' textures, each once (a run's frames share one): their materials (after the water/liquid ones), and the
+// images, textures and samplers of the document.
+struct FrameTextures {
+  std::vector<const MeshTexture*> seen;
+  json materials = json::array(), doc = json::object();
+};
+
+// Frame k's primitives: its vertex attributes (and `mesh_node`, the dequantizing node, when quantized), and one
+// primitive per material present. A frame in its target's texture is split at the UV seams, with TEXCOORD_0 instead of
+// COLOR_0 (glTF multiplies the two), the welded mesh's normals (a seam is no crease) and its texture's material.
+Result<json> frame_primitives(GlbBuilder& b, const TriangleMesh& m, const GlbOptions& o, std::size_t k,
+                              std::size_t mesh_index, FrameTextures& textures, json& mesh_node, Aabb& last_box) {
+  const bool uv = glb::textured(m) && o.triangle_material.empty();
+  glb::UvSplit split;
+  if (uv) split = glb::split_uv(m);
+  const TriangleMesh& w = uv ? split.mesh : m;
+  std::vector<Vec3f> normals = vertex_normals(m);
+  if (uv) {
+    std::vector<Vec3f> n(w.vertices.size());
+    for (std::size_t i = 0; i < n.size(); ++i) n[i] = normals[split.source[i]];
+    normals = std::move(n);
+  }
+  Aabb box;
+  for (const auto& v : w.vertices) box.extend(v);
+  last_box = box;
+  json attributes = o.quantize ? quantized_attributes(b, w, normals, box, mesh_index, k, mesh_node)
+                               : float_attributes(b, w, normals, box);
+  std::size_t material = 0;
+  if (uv) {
+    attributes["TEXCOORD_0"] = glb::uv_accessor(b, split.uv);
+    auto seen = std::find(textures.seen.begin(), textures.seen.end(), m.texture.get());
+    if (seen == textures.seen.end()) {
+      FF_TRY(const int index, glb::add_texture(b, textures.doc, *m.texture));
+      textures.materials.push_back(glb::textured_material(*m.texture, index, fmt::format("liquid_textured_{}", index)));
+      seen = textures.seen.insert(textures.seen.end(), m.texture.get());
+    }
+    material = (o.materials.empty() ? 1 : o.materials.size()) + std::size_t(seen - textures.seen.begin());
+  } else if (!m.colours.empty()) {
+    attributes["COLOR_0"] = glb::colour_accessor(b, m.colours);
+  }
+  json primitives = json::array();
+  if (o.triangle_material.empty()) {
+    primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, w)}, {"material", material}, {"mode", 4}});
+  } else {
+    // One primitive per material present, sharing the frame's vertices.
+    const auto& mat = o.triangle_material[k];
+    if (mat.size() != m.triangles.size())
+      return param_error(fmt::format("glb: frame {}: {} triangle materials for {} triangles", k, mat.size(),
+                                     m.triangles.size()));
+    for (std::size_t id = 0; id < o.materials.size(); ++id) {
+      TriangleMesh part;
+      part.vertices = m.vertices;  // index_accessor's index width depends on the vertex count only
+      for (std::size_t t = 0; t < mat.size(); ++t)
+        if (mat[t] == id) part.triangles.push_back(m.triangles[t]);
+      if (part.triangles.empty()) continue;
+      primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, part)}, {"material", id}, {"mode", 4}});
+    }
+    for (std::uint8_t id : mat)
+      if (id >= o.materials.size())
+        return param_error(fmt::format("glb: frame {}: material {} of {}", k, int(id), o.materials.size()));
+  }
+  return primitives;
+}
+
 }  // namespace
 
 Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& o) {
@@ -247,6 +405,7 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
   json root = {{"name", "fluidform"}, {"children", json::array()}};
   nodes.push_back(root);
   Aabb last_box;  // of the last frame with a surface: sizes the material's absorption
+  FrameTextures textures;
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const TriangleMesh& m = frames[k];
     FF_CHECK(check_glb_frame(m, k));
@@ -257,35 +416,8 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
     nodes[0]["children"].push_back(node_index);
     nodes.push_back(node);
     if (m.triangles.empty()) continue;
-    const std::vector<Vec3f> normals = vertex_normals(m);
-    Aabb box;
-    for (const auto& v : m.vertices) box.extend(v);
-    last_box = box;
     json mesh_node = nullptr;  // quantized: the dequantizing child node that holds the mesh
-    json attributes = o.quantize ? quantized_attributes(b, m, normals, box, meshes.size(), k, mesh_node)
-                                 : float_attributes(b, m, normals, box);
-    if (!m.colours.empty()) attributes["COLOR_0"] = glb::colour_accessor(b, m.colours);
-    json primitives = json::array();
-    if (o.triangle_material.empty()) {
-      primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, m)}, {"material", 0}, {"mode", 4}});
-    } else {
-      // One primitive per material present, sharing the frame's vertices.
-      const auto& mat = o.triangle_material[k];
-      if (mat.size() != m.triangles.size())
-        return param_error(fmt::format("glb: frame {}: {} triangle materials for {} triangles", k, mat.size(),
-                                       m.triangles.size()));
-      for (std::size_t id = 0; id < o.materials.size(); ++id) {
-        TriangleMesh part;
-        part.vertices = m.vertices;  // index_accessor's index width depends on the vertex count only
-        for (std::size_t t = 0; t < mat.size(); ++t)
-          if (mat[t] == id) part.triangles.push_back(m.triangles[t]);
-        if (part.triangles.empty()) continue;
-        primitives.push_back({{"attributes", attributes}, {"indices", index_accessor(b, part)}, {"material", id}, {"mode", 4}});
-      }
-      for (std::uint8_t id : mat)
-        if (id >= o.materials.size())
-          return param_error(fmt::format("glb: frame {}: material {} of {}", k, int(id), o.materials.size()));
-    }
+    FF_TRY(json primitives, frame_primitives(b, m, o, k, meshes.size(), textures, mesh_node, last_box));
     meshes.push_back({{"name", fmt::format("frame_{:05d}", k)}, {"primitives", primitives}});
     if (mesh_node.is_null()) {
       nodes[static_cast<std::size_t>(node_index)]["mesh"] = meshes.size() - 1;
@@ -308,6 +440,8 @@ Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frame
               {"buffers", {{{"byteLength", b.bin.size()}}}},
               {"bufferViews", b.views},
               {"accessors", b.accessors}};
+  for (auto& t : textures.materials) doc["materials"].push_back(std::move(t));
+  for (auto& [key, value] : textures.doc.items()) doc[key] = std::move(value);
   if (!meshes.empty()) doc["meshes"] = meshes;
   if (!animation.is_null()) doc["animations"] = json::array({animation});
   doc["extensionsUsed"] = any_water(o) ? glb::water_extensions() : json::array();

@@ -36,12 +36,19 @@ struct WaterMaterial {
 };
 
 /// MTL text of two materials: "water" (the clear liquid, Kd the tint) and "liquid" (opaque, white: an OBJ with vertex
-/// colours names it).
-std::string encode_mtl(const WaterMaterial& material);
+/// colours names it); with `texture_file` (an image beside the MTL) a third, "liquid_textured" (map_Kd that file, Kd
+/// `texture_factor`), which an OBJ with UVs names.
+std::string encode_mtl(const WaterMaterial& material, std::string_view texture_file = {},
+                       const Vec3f& texture_factor = Vec3f::Ones());
 
-/// OBJ text: `v` lines (`v x y z r g b`, sRGB, when the mesh has colours), then `vn` (vertex normals, same indexing)
-/// when `normals`, then `f a//a b//b c//c`; with `mtllib` (a file name beside the OBJ), `mtllib` + `usemtl water`
-/// (`usemtl liquid` with colours) before the faces.
+/// Whether a mesh's UVs (TriangleMesh::corner_uv) can be written: one triple per triangle, finite, and a texture with
+/// pixels to index. The writers check it.
+Status check_uv(const TriangleMesh& mesh, std::string_view what);
+
+/// OBJ text: `v` lines (`v x y z r g b`, sRGB, when the mesh has colours), then `vt` when the mesh has a texture
+/// (TriangleMesh::corner_uv: the vertices are then split at its seams), `vn` (vertex normals, same indexing) when
+/// `normals`, then `f a//a b//b c//c` (`f a/a/a …` with UVs); with `mtllib` (a file name beside the OBJ), `mtllib` +
+/// `usemtl water` (`usemtl liquid` with colours, `liquid_textured` with UVs) before the faces.
 std::string encode_obj(const TriangleMesh& mesh, bool normals = true, std::string_view comment = "fluidform mesh",
                        std::string_view mtllib = {});
 Status write_obj(const std::filesystem::path& path, const TriangleMesh& mesh, bool normals = true,

@@ -155,7 +155,7 @@ struct FileSpace {
   Aabb file_box, world_box;
 };
 
-FileSpace to_file_space(const TriangleMesh& mesh, const MeshTransform& transform) {
+FileSpace to_file_space(const TriangleMesh& mesh, const MeshTransform& transform, const std::vector<Vec3f>& world_normals) {
   const std::size_t nv = mesh.vertices.size();
   FileSpace f;
   // T and its inverse, in double (MeshTransform::apply's R = Rz · Ry · Rx).
@@ -166,7 +166,6 @@ FileSpace to_file_space(const TriangleMesh& mesh, const MeshTransform& transform
 
   // Vertices in the file's scene space; normals outward in the world after T (n_file ∝ Lᵀ n_world, the inverse
   // transpose of T⁻¹'s linear part, which also undoes a mirror's reversal).
-  const std::vector<Vec3f> world_normals = vertex_normals(mesh);
   f.pos.resize(nv), f.nrm.resize(nv);
   f.world_box = mesh.bounds();
   for (std::size_t i = 0; i < nv; ++i) {
@@ -326,23 +325,45 @@ Result<json> rig_animations(GlbBuilder& b, const Skin& skin) {
 
 }  // namespace
 
-Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
+Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& welded,
                                                     const std::vector<std::array<std::uint16_t, kMaxInfluences>>& joints,
                                                     const std::vector<std::array<float, kMaxInfluences>>& weights,
                                                     const Skin& skin, const MeshTransform& transform, const Vec3f& tint) {
-  FF_CHECK(check_rig_input(mesh, joints, weights, skin, transform));
-  const std::size_t nv = mesh.vertices.size();
-  const FileSpace f = to_file_space(mesh, transform);
+  FF_CHECK(check_rig_input(welded, joints, weights, skin, transform));
+  FF_CHECK(check_uv(welded, "rigged glb"));
+  const bool coloured = !welded.colours.empty() || glb::textured(welded);  // opaque: vertex colours or texture
+  if (!welded.colours.empty() && welded.colours.size() != welded.vertices.size())
+    return input_error(fmt::format("rigged glb: {} vertex colours for {} vertices", welded.colours.size(), welded.vertices.size()));
   std::vector<std::array<std::uint16_t, kMaxInfluences>> jo = joints;
   std::vector<std::array<float, kMaxInfluences>> we = weights;
-  for (std::size_t i = 0; i < nv; ++i) FF_CHECK(clean_influences(jo[i], we[i], skin.joint_nodes.size(), i));
+  for (std::size_t i = 0; i < jo.size(); ++i) FF_CHECK(clean_influences(jo[i], we[i], skin.joint_nodes.size(), i));
+  // In its target's texture: split at the UV seams, each copy with its vertex's influences and normal.
+  const bool uv = glb::textured(welded);
+  glb::UvSplit split;
+  std::vector<Vec3f> normals = vertex_normals(welded);
+  if (uv) {
+    split = glb::split_uv(welded);
+    std::vector<std::array<std::uint16_t, kMaxInfluences>> sj(split.source.size());
+    std::vector<std::array<float, kMaxInfluences>> sw(split.source.size());
+    std::vector<Vec3f> sn(split.source.size());
+    for (std::size_t i = 0; i < sj.size(); ++i)
+      sj[i] = jo[split.source[i]], sw[i] = we[split.source[i]], sn[i] = normals[split.source[i]];
+    jo = std::move(sj), we = std::move(sw), normals = std::move(sn);
+  }
+  const TriangleMesh& mesh = uv ? split.mesh : welded;
+  const FileSpace f = to_file_space(mesh, transform, normals);
 
-  const bool coloured = !mesh.colours.empty();
-  if (coloured && mesh.colours.size() != nv)
-    return input_error(fmt::format("rigged glb: {} vertex colours for {} vertices", mesh.colours.size(), nv));
   GlbBuilder b;
   json attributes = vertex_attributes(b, f, jo, we);
-  if (coloured) attributes["COLOR_0"] = glb::colour_accessor(b, mesh.colours);
+  json extra = json::object();  // images, textures, samplers
+  json textured = nullptr;
+  if (uv) {
+    attributes["TEXCOORD_0"] = glb::uv_accessor(b, split.uv);
+    FF_TRY(const int texture, glb::add_texture(b, extra, *welded.texture));
+    textured = glb::textured_material(*welded.texture, texture);
+  } else if (coloured) {
+    attributes["COLOR_0"] = glb::colour_accessor(b, mesh.colours);
+  }
   const int indices = index_accessor(b, mesh);
   const json nodes = rig_nodes(skin, transform, f.rot);
   const std::size_t mesh_node = nodes.size() - 1;
@@ -372,6 +393,8 @@ Result<std::vector<std::uint8_t>> encode_rigged_glb(const TriangleMesh& mesh,
               {"accessors", b.accessors},
               {"extensionsUsed", coloured ? json::array() : glb::water_extensions()}};
   if (coloured) doc.erase("extensionsUsed");
+  if (!textured.is_null()) doc["materials"] = json::array({textured});
+  for (auto& [key, value] : extra.items()) doc[key] = std::move(value);
   if (!animations.empty()) doc["animations"] = animations;
   return glb::pack_glb(doc, b.bin);
 }

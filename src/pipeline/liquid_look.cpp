@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <numeric>
+#include <random>
 #include <unordered_map>
 
 namespace ff::pipeline {
@@ -122,6 +124,42 @@ Vec3f look_colour(const PosedLook& p, const Vec3f& q, float* distance = nullptr)
   return p.phase->look.colour_at(c.triangle, barycentric(c.point, x[tri[0]], x[tri[1]], x[tri[2]]));
 }
 
+// The one texture target t's whole look is (one mesh, UVs, no vertex colours, every triangle the same texture and
+// factor), or null.
+std::shared_ptr<const io::MeshTexture> single_texture(const LiquidLooks::Target& t) {
+  if (t.appearance != scene::Appearance::Target || t.phases.size() != 1) return nullptr;
+  const io::TargetLook& look = t.phases[0].look;
+  if (look.uv.empty() || !look.colours.empty() || look.material.empty()) return nullptr;
+  const io::LookMaterial& first = look.materials[look.material[0]];
+  if (first.texture < 0) return nullptr;
+  const auto factor = [](const io::LookMaterial& m) { return m.factor_with_texture ? m.colour : Vec3f::Ones(); };
+  for (const auto m : look.material) {
+    const io::LookMaterial& other = look.materials[m];
+    if (other.texture != first.texture || factor(other) != factor(first)) return nullptr;
+  }
+  auto out = std::make_shared<io::MeshTexture>();
+  out->image = look.textures[std::size_t(first.texture)];
+  out->factor = factor(first);
+  return out;
+}
+
+// Barycentric coordinates of p's projection on the plane of abc, not clamped (outside the triangle too): the
+// triangle's UV map extended over its plane.
+Vec3f plane_barycentric(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const Vec3f n = (b - a).cross(c - a);
+  const float area = n.squaredNorm();
+  if (!(area > 0.0f)) return Vec3f(1.0f, 0.0f, 0.0f);
+  const float wa = n.dot((b - p).cross(c - p)) / area, wb = n.dot((c - p).cross(a - p)) / area;
+  return Vec3f(wa, wb, 1.0f - wa - wb);
+}
+
+float srgb_step(float linear) { return float(io::linear_to_srgb(linear)); }
+double srgb_difference(const Vec3f& a, const Vec3f& b) {
+  double d = 0.0;
+  for (int c = 0; c < 3; ++c) d += std::abs(srgb_step(a[c]) - srgb_step(b[c]));
+  return d / 3.0;
+}
+
 }  // namespace
 
 bool LiquidLooks::coloured() const {
@@ -162,6 +200,7 @@ LiquidLooks load_liquid_looks(const scene::Scene& scene, const std::vector<Targe
     for (const auto& swap : spec.swaps)
       if (auto p = load_phase(spec, t, swap.mesh, swap.time, out)) target.phases.push_back(std::move(*p));
   }
+  if (out.targets.size() == 1) out.targets[0].texture = single_texture(out.targets[0]);
   for (const std::string& w : out.warnings) spdlog::warn("look: {}", w);
   return out;
 }
@@ -220,6 +259,103 @@ std::vector<Vec3f> liquid_colours(const LiquidLooks& looks, const io::TriangleMe
     }
   });
   return out;
+}
+
+std::vector<std::array<io::Vec2f, 3>> liquid_uvs(const LiquidLooks& looks, const io::TriangleMesh& mesh, double time) {
+  if (looks.targets.size() != 1 || looks.targets[0].texture == nullptr || mesh.triangles.empty()) return {};
+  const PosedLook p = pose_look(looks.targets[0], time);
+  if (p.field() == nullptr) return {};
+  const io::TargetLook& look = p.phase->look;
+  const std::vector<Vec3f>& x = p.vertices.empty() ? look.mesh.vertices : p.vertices;
+  const auto uv_at = [&](Index t, const Vec3f& w) {
+    const auto& tri = look.mesh.triangles[t];
+    return io::Vec2f(w.x() * look.uv[tri[0]] + w.y() * look.uv[tri[1]] + w.z() * look.uv[tri[2]]);
+  };
+  // Per vertex: the UV of its nearest target point (in the target's rest frame, posed as the colours are).
+  std::vector<Vec3f> q(mesh.vertices.size());
+  std::vector<io::Vec2f> at(mesh.vertices.size());
+  std::vector<Index> on(mesh.vertices.size());  // the target triangle of that point
+  core::parallel_for(static_cast<std::int64_t>(q.size()), [&](std::int64_t i) {
+    const auto v = static_cast<std::size_t>(i);
+    q[v] = p.rest * mesh.vertices[v];
+    const auto c = p.field()->closest(q[v]);
+    const auto& tri = look.mesh.triangles[c.triangle];
+    at[v] = uv_at(c.triangle, barycentric(c.point, x[tri[0]], x[tri[1]], x[tri[2]]));
+    on[v] = c.triangle;
+  });
+  // Per triangle: its corners' UVs, unless they disagree with the UV map of the target triangle nearest to its centre
+  // (extended over its plane) by more than half the triangle's size in that map, plus two texels: a seam between
+  // them, or the wrap of a map around a cylinder. A triangle whose corners agree with the map of its first corner's
+  // triangle is inside one chart, and skips the search for its centre's (most triangles: it is the costly part).
+  const io::Texture& image = looks.targets[0].texture->image;
+  const float texel = 1.0f / float(std::max(image.width, image.height));
+  const auto mapped_by = [&](Index near, const std::array<Index, 3>& f, std::array<io::Vec2f, 3>& mapped) {
+    const auto& lt = look.mesh.triangles[near];
+    for (std::size_t k = 0; k < 3; ++k) mapped[k] = uv_at(near, plane_barycentric(q[f[k]], x[lt[0]], x[lt[1]], x[lt[2]]));
+    float size = 0.0f;
+    for (std::size_t k = 0; k < 3; ++k) size = std::max(size, (mapped[k] - mapped[(k + 1) % 3]).norm());
+    const float tolerance = 0.5f * size + 2.0f * texel;
+    bool agree = true;
+    for (std::size_t k = 0; k < 3; ++k) agree &= (mapped[k] - at[f[k]]).norm() <= tolerance;
+    return agree;
+  };
+  std::vector<std::array<io::Vec2f, 3>> out(mesh.triangles.size());
+  core::parallel_for(static_cast<std::int64_t>(out.size()), [&](std::int64_t i) {
+    const auto t = static_cast<std::size_t>(i);
+    const auto& f = mesh.triangles[t];
+    std::array<io::Vec2f, 3> mapped;
+    const auto centre = [&] { return p.field()->closest((q[f[0]] + q[f[1]] + q[f[2]]) / 3.0f).triangle; };
+    const bool agree = mapped_by(on[f[0]], f, mapped) || mapped_by(centre(), f, mapped);
+    out[t] = agree ? std::array<io::Vec2f, 3>{at[f[0]], at[f[1]], at[f[2]]} : mapped;
+  });
+  return out;
+}
+
+LookMeasure measure_look(const LiquidLooks& looks, const io::TriangleMesh& mesh, double time, std::size_t points) {
+  LookMeasure m;
+  if (looks.targets.size() != 1 || mesh.triangles.empty() || mesh.colours.size() != mesh.vertices.size() ||
+      mesh.corner_uv.size() != mesh.triangles.size() || mesh.texture == nullptr)
+    return m;
+  const PosedLook p = pose_look(looks.targets[0], time);
+  if (p.field() == nullptr) return m;
+  // Points uniform in area over the triangles, from a fixed seed (the same figures every time).
+  std::vector<double> cum(mesh.triangles.size());
+  double total = 0.0;
+  for (std::size_t t = 0; t < cum.size(); ++t) {
+    const auto& f = mesh.triangles[t];
+    total += 0.5 * double((mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm());
+    cum[t] = total;
+  }
+  if (!(total > 0.0)) return m;
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  struct Sample {
+    std::size_t t;
+    Vec3f w;
+  };
+  std::vector<Sample> samples(points);
+  for (Sample& s : samples) {
+    s.t = std::min<std::size_t>(std::size_t(std::lower_bound(cum.begin(), cum.end(), u01(rng) * total) - cum.begin()), cum.size() - 1);
+    const double r1 = std::sqrt(u01(rng)), r2 = u01(rng);
+    s.w = Vec3f(float(1.0 - r1), float(r1 * (1.0 - r2)), float(r1 * r2));
+  }
+  std::vector<double> by_vertex(points), by_uv(points);
+  const io::MeshTexture& tex = *mesh.texture;
+  core::parallel_for(static_cast<std::int64_t>(points), [&](std::int64_t i) {
+    const Sample& s = samples[std::size_t(i)];
+    const auto& f = mesh.triangles[s.t];
+    const Vec3f at = s.w.x() * mesh.vertices[f[0]] + s.w.y() * mesh.vertices[f[1]] + s.w.z() * mesh.vertices[f[2]];
+    const Vec3f truth = look_colour(p, p.rest * at);
+    const Vec3f vc = s.w.x() * mesh.colours[f[0]] + s.w.y() * mesh.colours[f[1]] + s.w.z() * mesh.colours[f[2]];
+    const auto& uv = mesh.corner_uv[s.t];
+    const Vec3f tc = io::sample_texture(tex.image, s.w.x() * uv[0] + s.w.y() * uv[1] + s.w.z() * uv[2]).cwiseProduct(tex.factor);
+    by_vertex[std::size_t(i)] = srgb_difference(vc, truth);
+    by_uv[std::size_t(i)] = srgb_difference(tc, truth);
+  });
+  m.points = points;
+  m.vertex_colours = std::accumulate(by_vertex.begin(), by_vertex.end(), 0.0) / double(points);
+  m.uvs = std::accumulate(by_uv.begin(), by_uv.end(), 0.0) / double(points);
+  return m;
 }
 
 }  // namespace ff::pipeline

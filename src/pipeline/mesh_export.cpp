@@ -5,6 +5,7 @@
 #include "core/neighbor_grid.h"
 #include "core/timer.h"
 #include "io/atomic_file.h"
+#include "io/picture.h"
 #include "io/write_mesh.h"
 #include "io/write_ply.h"
 #include "io/write_vdb.h"
@@ -29,6 +30,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kMtlName = "water.mtl";  // beside the OBJs in OUT/mesh
+constexpr const char* kTextureName = "liquid_texture.png";  // the liquid's texture, when it has UVs (MTL map_Kd)
 
 // "spacing D" in a particle PLY's header comments (written by `run`), or 0.
 float spacing_from_comments(const io::ParticleFrame& f) {
@@ -155,7 +157,7 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
   std::vector<Error> errors(chosen.size());
   std::vector<char> failed(chosen.size(), 0);
   std::vector<surface::SurfaceStats> stats(chosen.size());
-  std::vector<double> colouring(chosen.size(), 0.0);  // s per frame spent on the liquid's look
+  std::vector<double> colouring(chosen.size(), 0.0), uv_seconds(chosen.size(), 0.0);  // s per frame on the look (UVs)
   progress.begin("meshing", chosen.size());
   std::atomic<std::size_t> done{0};
   std::atomic<bool> cancelled{false};
@@ -180,7 +182,10 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
         const double time = double(k >= 0 ? k : static_cast<long>(chosen[c])) / o.fps;
         const core::Stopwatch watch;
         meshes[c].colours = liquid_colours(*o.looks, meshes[c], vt, time);
-        colouring[c] = watch.seconds();
+        const double coloured = watch.seconds();
+        meshes[c].corner_uv = liquid_uvs(*o.looks, meshes[c], time);  // kept or dropped by pick_look
+        if (!meshes[c].corner_uv.empty()) meshes[c].texture = o.looks->targets[0].texture;
+        colouring[c] = watch.seconds(), uv_seconds[c] = colouring[c] - coloured;
       }
       if (o.vdb) {
         // The level set at the meshing grid's resolution (cell_size spacings), a band of 3 voxels each side.
@@ -193,13 +198,6 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
           failed[c] = 1, errors[c] = st.error();
         }
       }
-      if (o.frame_objs && !o.final_only) {
-        const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
-        if (auto st = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string()),
-                                    kMtlName);
-            !st.ok())
-          failed[c] = 1, errors[c] = st.error();
-      }
     }
     const std::size_t now = ++done;
 #pragma omp critical(ff_mesh_progress)
@@ -211,9 +209,49 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
     if (failed[c]) return errors[c];
   last_stats = stats.back();
   if (o.looks != nullptr && o.looks->coloured())
-    spdlog::info("mesh: the liquid's look on {} frame(s) in {:.2f} s (summed over frames)", chosen.size(),
-                 std::accumulate(colouring.begin(), colouring.end(), 0.0));
+    spdlog::info("mesh: the liquid's look on {} frame(s) in {:.2f} s (summed over frames; its UVs {:.2f} s)",
+                 chosen.size(), std::accumulate(colouring.begin(), colouring.end(), 0.0),
+                 std::accumulate(uv_seconds.begin(), uv_seconds.end(), 0.0));
   return meshes;
+}
+
+// Vertex colours or UVs (pipeline/liquid_look.h): measured on the final mesh; the UVs of every frame are dropped
+// unless they keep clearly more of the target's look there.
+LookMeasure pick_look(std::vector<io::TriangleMesh>& meshes, const MeshOptions& o, double final_time) {
+  LookMeasure m;
+  if (o.looks == nullptr || meshes.empty() || meshes.back().corner_uv.empty()) return m;
+  m = measure_look(*o.looks, meshes.back(), final_time);
+  const bool uvs = m.uvs_win();
+  spdlog::info("mesh: the liquid's look as {} (against the target's colour between the vertices of the final mesh: "
+               "UVs {:.2f}, vertex colours {:.2f} sRGB steps, mean over {} points)",
+               uvs ? "UVs into its target's texture" : "vertex colours", m.uvs, m.vertex_colours, m.points);
+  if (!uvs)
+    for (io::TriangleMesh& mesh : meshes) mesh.corner_uv.clear(), mesh.texture.reset();
+  return m;
+}
+
+// The OBJs' texture beside them (OUT/mesh/liquid_texture.png), and their MTL naming it.
+Status write_obj_texture(const fs::path& out, const io::MeshTexture& t) {
+  io::Picture p;
+  p.width = t.image.width, p.height = t.image.height, p.rgb = t.image.rgb;
+  FF_TRY(const std::vector<std::uint8_t> png, io::encode_png(p));
+  FF_CHECK(io::write_file_atomic(out / "mesh" / kTextureName, png));
+  return io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{}, kTextureName, t.factor));
+}
+
+// The chosen frames' OBJs (OUT/mesh/frame_NNNNN.obj), several at once.
+Status write_frame_objs(std::span<const fs::path> frames, std::span<const std::size_t> chosen,
+                        const std::vector<io::TriangleMesh>& meshes, const fs::path& out) {
+  std::vector<Status> status(chosen.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    const fs::path& file = frames[chosen[c]];
+    const long k = io::frame_number(file);
+    const fs::path p = out / "mesh" / fmt::format("frame_{:05d}.obj", k >= 0 ? k : static_cast<long>(chosen[c]));
+    status[c] = io::write_obj(p, meshes[c], true, fmt::format("fluidform mesh of {}", file.filename().string()), kMtlName);
+  }
+  for (const Status& st : status) FF_CHECK(st);
+  return {};
 }
 
 // Every particle frame, in order, as one PC2 point cache and its frame-0 point mesh. Particles are written sorted
@@ -271,6 +309,7 @@ Status write_page_animation(const fs::path& out, const std::vector<io::TriangleM
     io::TriangleMesh d;
     if (m.triangles.size() <= budget) {
       d = m;
+      d.corner_uv.clear(), d.texture.reset();  // the page's copy is light: vertex colours, no texture image
     } else if (g.triangle_material.empty() && surface::check_mesh(m).ok_allowing_cavities()) {
       surface::DecimateParams p;
       p.max_triangles = std::max<std::size_t>(budget, 200);
@@ -326,6 +365,8 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   }
   // The water material every OBJ names (Blender's OBJ importer reads it into a Principled BSDF).
   FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
+  std::error_code gone;
+  fs::remove(out / "mesh" / kTextureName, gone);  // an earlier export's texture: written again below if UVs win
 
   const std::vector<std::size_t> chosen = chosen_frames(frames.size(), o);
   auto last = io::read_particles_ply(frames.back());
@@ -335,9 +376,12 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
 
   surface::SurfaceStats last_stats;
   std::vector<std::vector<std::uint8_t>> labels;
-  FF_TRY(const std::vector<io::TriangleMesh> meshes,
-         reconstruct_frames(frames, chosen, out, d, o, last_stats, labels, progress));
+  FF_TRY(std::vector<io::TriangleMesh> meshes, reconstruct_frames(frames, chosen, out, d, o, last_stats, labels, progress));
   sum.frames_meshed = chosen.size();
+  const long last_k = io::frame_number(frames.back());
+  sum.look = pick_look(meshes, o, double(last_k >= 0 ? last_k : static_cast<long>(frames.size() - 1)) / o.fps);
+  if (!meshes.back().corner_uv.empty()) FF_CHECK(write_obj_texture(out, *meshes.back().texture));
+  if (o.frame_objs && !o.final_only) FF_CHECK(write_frame_objs(frames, chosen, meshes, out));
 
   const io::TriangleMesh& fin = meshes.back();
   const auto check = surface::check_mesh(fin);

@@ -53,6 +53,8 @@ struct MeshSummary {
   int final_genus = 0;
   std::size_t final_components = 0;
   double seconds = 0.0;      ///< wall time of the whole export
+  /// Vertex colours or UVs, measured on the final mesh (points 0: the look had no texture to index, or none).
+  LookMeasure look;
 };
 
 /// Median nearest-neighbour distance of (up to 4096 of) the points: the spacing of a fluid near rest.

@@ -440,6 +440,7 @@ Status mesh_run(const fs::path& out, const scene::Scene& scene, int last_frame, 
   sum.mesh_triangles = ms->final_triangles;
   sum.mesh_ok = ms->final_ok;
   sum.mesh_frames = ms->frames_meshed;
+  sum.mesh_uvs = ms->look.uvs_win();
   sum.mesh_seconds = ms->seconds;
   return {};
 }
@@ -454,6 +455,8 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
   // The look of the final mesh, as final.obj has it (load_mesh reads positions only; one target: no labels).
   std::vector<Vec3f> colours;
   if (looks.coloured()) colours = liquid_colours(looks, *formed, {}, time);
+  std::vector<std::array<io::Vec2f, 3>> uvs;  // and its UVs, when the meshes were written with them
+  if (sum.mesh_uvs) uvs = liquid_uvs(looks, *formed, time);
   const Eigen::Affine3f rest = motion.at(time).rest_from_world();
   for (Vec3f& v : formed->vertices) v = rest * v;
   const pose::TargetSkin& skin = *target.skin;
@@ -468,6 +471,8 @@ Status rig_final_mesh(const fs::path& out, const scene::Scene& scene, const Targ
     clips.clips.push_back(pose::pingpong_clip(played));
   }
   rigged.bind_mesh.colours = std::move(colours);  // same vertices, same order
+  if (!uvs.empty() && rigged.bind_mesh.triangles.size() == uvs.size())
+    rigged.bind_mesh.corner_uv = std::move(uvs), rigged.bind_mesh.texture = looks.targets[0].texture;
   FF_CHECK(io::write_rigged_glb(out / "rigged.glb", rigged.bind_mesh, rigged.joints, rigged.weights, clips,
                                 scene.targets[0].transform, scene.targets[0].tint));
   spdlog::info("rigged.glb: the final mesh in bind pose with {} joints and {} clip(s) ({} vertices by the fallback, "

@@ -49,6 +49,7 @@ struct RunSummary {
   // Meshing (when RunOptions::mesh).
   std::size_t mesh_triangles = 0, mesh_frames = 0;
   bool mesh_ok = false;
+  bool mesh_uvs = false;  ///< the meshes wear their target's texture through UVs (else vertex colours, or none)
   double mesh_seconds = 0.0;
   bool rigged = false;  ///< OUT/rigged.glb written (one skinned target)
 };

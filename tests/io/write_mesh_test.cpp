@@ -1,6 +1,7 @@
 #include "io/write_mesh.h"
 
 #include "io/load_mesh.h"
+#include "io/picture.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
 
@@ -12,6 +13,10 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
+#include <numbers>
+#include <set>
+#include <tuple>
 
 namespace ff::io {
 namespace {
@@ -141,6 +146,128 @@ TEST(WriteGlb, WaterMaterialWithTransmissionIorAndVolume) {
   ASSERT_NE(at, std::string::npos);
   EXPECT_LT(at, obj.find("\nf ")) << "before the faces";
   EXPECT_EQ(encode_obj(f[0]).find("mtllib"), std::string::npos);
+}
+
+// A sphere in a texture through per-corner UVs, longitude and latitude, with the wrap seam of a world map: a triangle
+// across the date line takes u + 1 on its small side, so the vertices there carry two UVs. `distinct`: how many
+// (vertex, UV) pairs its corners have, what a writer must split the mesh into.
+TriangleMesh textured_sphere(std::size_t& distinct) {
+  TriangleMesh m = test::uv_sphere(0.5f, 16);
+  auto texture = std::make_shared<MeshTexture>();
+  texture->image.width = 4, texture->image.height = 2;
+  for (int i = 0; i < 8; ++i) texture->image.rgb.insert(texture->image.rgb.end(), {std::uint8_t(30 * i), 200, std::uint8_t(255 - 30 * i)});
+  texture->factor = Vec3f(1.0f, 0.5f, 0.25f);
+  m.texture = texture;
+  m.colours.assign(m.vertices.size(), Vec3f::Constant(0.5f));
+  std::set<std::tuple<Index, float, float>> pairs;
+  for (const auto& t : m.triangles) {
+    std::array<Vec2f, 3> uv;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3f& p = m.vertices[t[std::size_t(c)]];
+      uv[std::size_t(c)] = Vec2f(std::atan2(p.z(), p.x()) / (2.0f * std::numbers::pi_v<float>) + 0.5f,
+                                 std::acos(std::clamp(p.y() / 0.5f, -1.0f, 1.0f)) / std::numbers::pi_v<float>);
+    }
+    const auto [lo, hi] = std::minmax({uv[0].x(), uv[1].x(), uv[2].x()});
+    if (hi - lo > 0.5f)
+      for (auto& c : uv)
+        if (c.x() < 0.5f) c.x() += 1.0f;
+    m.corner_uv.push_back(uv);
+    for (int c = 0; c < 3; ++c) pairs.emplace(t[std::size_t(c)], uv[std::size_t(c)].x(), uv[std::size_t(c)].y());
+  }
+  distinct = pairs.size();
+  return m;
+}
+
+std::size_t lines_starting(const std::string& text, const std::string& prefix) {
+  std::size_t n = 0;
+  for (std::size_t at = 0; at < text.size(); at = text.find('\n', at) + 1) {
+    if (text.compare(at, prefix.size(), prefix) == 0) ++n;
+    if (text.find('\n', at) == std::string::npos) break;
+  }
+  return n;
+}
+
+TEST(WriteObj, ATexturedMeshIsSplitOnlyWhereItsCornersDisagree) {
+  std::size_t distinct = 0;
+  const TriangleMesh m = textured_sphere(distinct);
+  ASSERT_GT(distinct, m.vertices.size()) << "the sphere has a seam";
+  const std::string obj = encode_obj(m, true, "c", "water.mtl");
+  EXPECT_EQ(lines_starting(obj, "v "), distinct);
+  EXPECT_EQ(lines_starting(obj, "vt "), distinct);
+  EXPECT_EQ(lines_starting(obj, "vn "), distinct);
+  EXPECT_EQ(lines_starting(obj, "f "), m.triangles.size());
+  EXPECT_NE(obj.find("usemtl liquid_textured\n"), std::string::npos);
+  EXPECT_NE(obj.find("\nf 1/1/1 "), std::string::npos) << obj.substr(obj.find("\nf "), 40);
+  const std::string mtl = encode_mtl(WaterMaterial{}, "liquid_texture.png", m.texture->factor);
+  EXPECT_NE(mtl.find("newmtl liquid_textured\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("Kd 1.0000 0.5000 0.2500\n"), std::string::npos) << mtl;
+  EXPECT_NE(mtl.find("map_Kd liquid_texture.png\n"), std::string::npos) << mtl;
+  EXPECT_EQ(encode_mtl(WaterMaterial{}).find("liquid_textured"), std::string::npos);
+  // Written and read back (Assimp): the same triangles, split along the seam only.
+  const auto dir = test::temp_dir("obj-uv");
+  ASSERT_TRUE(write_obj(dir / "t.obj", m).ok());
+  auto back = load_mesh(dir / "t.obj");
+  ASSERT_TRUE(back.has_value()) << back.error().message;
+  EXPECT_EQ(back->triangles.size(), m.triangles.size());
+  // UVs that do not fit the mesh are refused, and nothing is written.
+  TriangleMesh bad = m;
+  bad.corner_uv.pop_back();
+  auto st = write_obj(dir / "bad.obj", bad);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("UVs for"), std::string::npos) << st.error().message;
+  bad = m;
+  bad.texture.reset();
+  st = write_obj(dir / "bad.obj", bad);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("without a texture"), std::string::npos) << st.error().message;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.obj"));
+}
+
+// Two textured frames: TEXCOORD_0 (glTF's v, flipped), no COLOR_0 (glTF would multiply the two), the texture embedded
+// once as a PNG that decodes to the same pixels, and a material that shows it times its factor.
+TEST(WriteGlb, TexturedFramesCarryTheirUvsAndEmbedTheTextureOnce) {
+  std::size_t distinct = 0;
+  const TriangleMesh m = textured_sphere(distinct);
+  for (const bool quantize : {true, false}) {
+    GlbOptions o;
+    o.quantize = quantize;
+    o.material.coloured = true;
+    const std::vector<TriangleMesh> f{m, m};
+    auto bytes = encode_glb(f, o);
+    ASSERT_TRUE(bytes.has_value()) << bytes.error().message;
+    const auto j = glb_json(*bytes);
+    ASSERT_EQ(j["images"].size(), 1u);
+    ASSERT_EQ(j["textures"].size(), 1u);
+    ASSERT_EQ(j["samplers"].size(), 1u);
+    EXPECT_EQ(j["samplers"][0]["wrapS"], 10497);
+    ASSERT_EQ(j["materials"].size(), 2u);
+    const auto& mat = j["materials"][1];
+    EXPECT_EQ(mat["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
+    EXPECT_NEAR(mat["pbrMetallicRoughness"]["baseColorFactor"][1].get<double>(), 0.5, 1e-6);
+    for (const auto& mesh : j["meshes"]) {
+      const auto& prim = mesh["primitives"][0];
+      EXPECT_EQ(prim["material"], 1);
+      EXPECT_FALSE(prim["attributes"].contains("COLOR_0"));
+      const auto& acc = j["accessors"][prim["attributes"]["TEXCOORD_0"].get<int>()];
+      EXPECT_EQ(acc["count"], distinct);
+      EXPECT_EQ(j["accessors"][prim["attributes"]["POSITION"].get<int>()]["count"], distinct);
+    }
+    // The embedded PNG is the texture.
+    const std::size_t bin = 20 + u32(*bytes, 12) + 8;
+    const auto& view = j["bufferViews"][j["images"][0]["bufferView"].get<int>()];
+    const std::size_t at = bin + view.value("byteOffset", std::size_t(0));
+    auto png = decode_png(std::span<const std::uint8_t>(bytes->data() + at, view["byteLength"].get<std::size_t>()));
+    ASSERT_TRUE(png.has_value());
+    EXPECT_EQ(png->width, 4);
+    EXPECT_EQ(png->rgb, m.texture->image.rgb);
+    // v flipped: the first vertex's TEXCOORD_0 is (u, 1 − v) of the first corner written.
+    const auto& uv_acc = j["accessors"][j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<int>()];
+    const auto& uv_view = j["bufferViews"][uv_acc["bufferView"].get<int>()];
+    float first[2];
+    std::memcpy(first, bytes->data() + bin + uv_view.value("byteOffset", std::size_t(0)), 8);
+    EXPECT_FLOAT_EQ(first[0], m.corner_uv[0][0].x());
+    EXPECT_FLOAT_EQ(first[1], 1.0f - m.corner_uv[0][0].y());
+  }
 }
 
 TEST(WriteGlb, QuantizedPositionsDecodeWithinAHalfStep) {

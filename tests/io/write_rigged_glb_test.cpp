@@ -12,6 +12,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <memory>
 
 namespace ff::io {
 namespace {
@@ -106,6 +107,58 @@ TEST(RiggedGlb, HoldsTheSkeletonSkinClipsAndTheMeshInTheFilesSpace) {
   const auto ibm = accessor_data<float>(*bytes, doc, doc["skins"][0]["inverseBindMatrices"].get<int>(), 16);
   for (std::size_t k = 0; k < 2; ++k)
     for (int e = 0; e < 16; ++e) EXPECT_FLOAT_EQ(ibm[16 * k + e], r.skin.inverse_bind[k].data()[e]);
+}
+
+// A rigged mesh in its target's texture: split at the UVs' seam only, every copy with its vertex's joints and weights,
+// TEXCOORD_0 and the texture embedded under the one material.
+TEST(RiggedGlb, ATexturedMeshKeepsEachCopysInfluences) {
+  const MeshTransform t = test::rig_transforms()[0];
+  Rig r = bar_rig(t);
+  auto texture = std::make_shared<MeshTexture>();
+  texture->image.width = 2, texture->image.height = 2, texture->image.rgb.assign(12, 128);
+  r.world.texture = texture;
+  // UVs from x, with the triangles of the bar's first half on the left of the texture and the rest on the right: the
+  // vertices the two halves share get two UVs.
+  const std::size_t half = r.world.triangles.size() / 2;
+  for (std::size_t k = 0; k < r.world.triangles.size(); ++k) {
+    std::array<Vec2f, 3> uv;
+    for (int c = 0; c < 3; ++c) uv[std::size_t(c)] = Vec2f(k < half ? 0.25f : 0.75f, r.world.vertices[r.world.triangles[k][std::size_t(c)]].y());
+    r.world.corner_uv.push_back(uv);
+  }
+  auto bytes = encode_rigged_glb(r.world, r.skin.joints, r.skin.weights, r.skin, t, Vec3f::Ones());
+  ASSERT_TRUE(bytes.has_value()) << bytes.error().message;
+  const json doc = glb_json(*bytes);
+  const json& attributes = doc["meshes"][0]["primitives"][0]["attributes"];
+  ASSERT_TRUE(attributes.contains("TEXCOORD_0"));
+  EXPECT_FALSE(attributes.contains("COLOR_0"));
+  EXPECT_EQ(doc["images"].size(), 1u);
+  EXPECT_EQ(doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
+  const auto n = doc["accessors"][attributes["POSITION"].get<int>()]["count"].get<std::size_t>();
+  EXPECT_GT(n, r.world.vertices.size()) << "split along the seam";
+  EXPECT_LT(n, 2 * r.world.vertices.size()) << "and only there";
+  // Every copy has the joints and weights of the vertex at its position.
+  const auto pos = accessor_data<float>(*bytes, doc, attributes["POSITION"], 3);
+  const auto joints = accessor_data<std::uint16_t>(*bytes, doc, attributes["JOINTS_0"], 4);
+  const auto weights = accessor_data<float>(*bytes, doc, attributes["WEIGHTS_0"], 4);
+  ASSERT_EQ(pos.size(), 3 * n);
+  std::size_t matched = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3f p(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+    for (std::size_t v = 0; v < r.scene.vertices.size(); ++v) {
+      if ((r.scene.vertices[v] - p).norm() > 1e-5f) continue;
+      float strongest = 0.0f;
+      std::uint16_t joint = 0;
+      for (std::size_t k = 0; k < r.skin.weights[v].size(); ++k)
+        if (r.skin.weights[v][k] > strongest) strongest = r.skin.weights[v][k], joint = r.skin.joints[v][k];
+      float got = 0.0f;
+      for (std::size_t k = 0; k < 4; ++k)
+        if (joints[4 * i + k] == joint) got += weights[4 * i + k];
+      EXPECT_NEAR(got, strongest, 1e-4f) << i;
+      ++matched;
+      break;
+    }
+  }
+  EXPECT_EQ(matched, n);
 }
 
 TEST(RiggedGlb, NormalisesWeightsForTheValidatorAndMergesRepeatedJoints) {

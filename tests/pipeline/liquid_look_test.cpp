@@ -2,11 +2,15 @@
 // the nearest point of the duck, a tinted target's tint, white for water), free fluid the nearest look, and a moving
 // target is asked in its rest frame.
 #include "pipeline/liquid_look.h"
+#include "sampling/mesh_field.h"
 #include "io/write_mesh.h"
 #include "support/shapes.h"
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
 
 namespace ff::pipeline {
 namespace {
@@ -112,6 +116,59 @@ TEST(LiquidLook, WaterOnlyScenesAreNotColouredAndAnUnreadableLookFallsBackToTheT
   io::TriangleMesh m;
   m.vertices = {Vec3f::Zero()};
   EXPECT_TRUE(liquid_colours(looks, m, {}, 0.0)[0].isApprox(s.targets[0].tint));
+}
+
+const fs::path kEarth = "/usr/share/assimp/models/Collada/earthCylindrical.DAE";
+
+// A world map finer than the formed mesh (earthCylindrical.DAE: a 2048×1024 photograph on a sphere of 1 920
+// triangles): a sphere of ~1 100 vertices over it gets UVs; no triangle's UVs sweep across the map (the map's wrap
+// seam and its poles are handled); and the UVs keep clearly more of the map than vertex colours (measure_look).
+// Several targets in a scene: vertex colours only.
+TEST(LiquidLook, UvsIntoAFineTextureKeepMoreThanVertexColours) {
+  ASSERT_TRUE(fs::exists(kEarth)) << "install assimp-testmodels (scripts/setup)";
+  scene::Scene s;
+  s.targets.resize(1);
+  s.targets[0].mesh = kEarth;
+  s.targets[0].appearance = scene::Appearance::Target;
+  const LiquidLooks looks = load_liquid_looks(s, {}, {});
+  ASSERT_NE(looks.targets[0].texture, nullptr);
+  EXPECT_EQ(looks.targets[0].texture->image.width, 2048);
+  auto look = io::load_target_look(kEarth);
+  ASSERT_TRUE(look.has_value());
+  // The formed mesh: a sphere of its own triangulation laid on the map's surface (each vertex moved to its nearest
+  // point of the target), as a formed liquid lies on it.
+  Vec3f centre = Vec3f::Zero();
+  for (const Vec3f& v : look->mesh.vertices) centre += v / float(look->mesh.vertices.size());
+  auto field = sampling::MeshField::build(look->mesh);
+  ASSERT_TRUE(field.has_value());
+  io::TriangleMesh mesh = test::uv_sphere(1.0f, 48);
+  for (Vec3f& v : mesh.vertices) v = field->closest(centre + v).point;
+  mesh.colours = liquid_colours(looks, mesh, {}, 0.0);
+  mesh.corner_uv = liquid_uvs(looks, mesh, 0.0);
+  ASSERT_EQ(mesh.corner_uv.size(), mesh.triangles.size());
+  mesh.texture = looks.targets[0].texture;
+  float widest = 0.0f;
+  for (const auto& uv : mesh.corner_uv) {
+    const auto [lo, hi] = std::minmax({uv[0].x(), uv[1].x(), uv[2].x()});
+    widest = std::max(widest, hi - lo);
+  }
+  float target_widest = 0.0f;  // the map's own triangles: some of earthCylindrical's span half of it
+  for (const auto& t : look->mesh.triangles) {
+    const auto [lo, hi] = std::minmax({look->uv[t[0]].x(), look->uv[t[1]].x(), look->uv[t[2]].x()});
+    target_widest = std::max(target_widest, hi - lo);
+  }
+  const LookMeasure m = measure_look(looks, mesh, 0.0);
+  std::printf("earth, %zu vertices: UVs %.2f, vertex colours %.2f sRGB steps (%zu points); widest triangle in u %.3f "
+              "(the map's own: %.3f)\n", mesh.vertices.size(), m.uvs, m.vertex_colours, m.points, widest, target_widest);
+  EXPECT_LE(widest, target_widest + 0.1f) << "a triangle sweeps across the map";
+  EXPECT_EQ(m.points, 20000u);
+  EXPECT_TRUE(m.uvs_win());
+  EXPECT_LT(m.uvs, 0.5 * m.vertex_colours);
+
+  const fs::path dir = test::temp_dir("liquid-look-uv");
+  const LiquidLooks several = load_liquid_looks(two_targets(dir), {}, {});
+  EXPECT_EQ(several.targets[0].texture, nullptr);
+  EXPECT_TRUE(liquid_uvs(several, mesh, 0.0).empty());
 }
 
 }  // namespace
