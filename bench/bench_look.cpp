@@ -174,16 +174,12 @@ int main(int argc, char** argv) {
       at += w[c] * (n.bary.x() * look->uv[lt[0]] + n.bary.y() * look->uv[lt[1]] + n.bary.z() * look->uv[lt[2]]);
       one_chart &= chart[n.triangle] == chart[corner[f[0]].triangle];
     }
-    // The texture at a UV, through a one-triangle look whose corners all carry it.
+    // The texture at a UV, times the glTF factor, as TargetLook::colour_at reads it (one textured material assumed).
+    const io::LookMaterial& mat = look->materials[look->material[q.triangle]];
     const auto texture_at = [&](const Eigen::Vector2f& at_uv) {
-      io::TargetLook probe;
-      probe.mesh.vertices = {Vec3f::Zero(), Vec3f::Zero(), Vec3f::Zero()};
-      probe.mesh.triangles = {{0, 1, 2}};
-      probe.uv = {at_uv, at_uv, at_uv};
-      probe.material = {0};
-      probe.materials = {look->materials[look->material[q.triangle]]};
-      if (probe.materials[0].texture >= 0) probe.textures = {look->textures[std::size_t(probe.materials[0].texture)]}, probe.materials[0].texture = 0;
-      return to_srgb(probe.colour_at(0, Vec3f(1, 0, 0)));
+      if (mat.texture < 0) return to_srgb(mat.colour);
+      const Vec3f c = io::sample_texture(look->textures[std::size_t(mat.texture)], at_uv);
+      return to_srgb(mat.factor_with_texture ? Vec3f(c.cwiseProduct(mat.colour)) : c);
     };
     const Vec3f by_uv = texture_at(at);
     uv_all.add(by_uv, truth);

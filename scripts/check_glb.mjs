@@ -3,7 +3,7 @@
 //   {"errors", "warnings", "messages": [first issues], "three": {"meshes", "nodes", "clips", "duration",
 //    "vertices_last", "box_last": [min, max] of the last frame's world-space positions, "colours_last": the mean of its
 //    vertex colours (null: none), "vertex_colours": whether its material shows them, "texture_last": its material's
-//    texture {width, height, uvs} (null: none),
+//    texture {width, height, uvs, uv_mean} (null: none),
 //    "material": the last frame's material as three.js made it: type, transmission, ior, thickness, attenuation}}
 // and exits non-zero when the file does not parse. Usage: node scripts/check_glb.mjs FILE.glb
 import { validate_glb } from './glb_report.mjs';
@@ -66,7 +66,16 @@ try {
     // The last frame's texture (the liquid in its target's texture): the image's size and the UV attribute's count.
     texture_last: last && last.material.map
       ? { width: last.material.map.image.width, height: last.material.map.image.height,
-          uvs: last.geometry.attributes.uv ? last.geometry.attributes.uv.count : 0 }
+          uvs: last.geometry.attributes.uv ? last.geometry.attributes.uv.count : 0,
+          // the mean UV as three.js reads it (glTF's convention: v down from the image's top row)
+          uv_mean: last.geometry.attributes.uv
+            ? [0, 1].map((c) => {
+                const a = last.geometry.attributes.uv;
+                let sum = 0;
+                for (let i = 0; i < a.count; i++) sum += a.getComponent(i, c);
+                return sum / a.count;
+              })
+            : null }
       : null,
     material: last
       ? {

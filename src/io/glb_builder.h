@@ -1,7 +1,8 @@
 #pragma once
 // Internal to io/: the pieces the GLB writers share (write_mesh.cpp's mesh animation, write_rigged_glb.cpp's rigged
-// mesh): glTF enums, the binary chunk under construction with its buffer views and accessors, the GLB container and
-// the water material. Not an interface for other stages.
+// mesh): glTF enums, the binary chunk under construction with its buffer views and accessors, the GLB container, the
+// water material, and a textured mesh's pieces (split at its UV seams, TEXCOORD_0, the embedded texture and its
+// material). Not an interface for other stages.
 #include "core/error.h"
 #include "core/types.h"
 #include "io/write_mesh.h"
@@ -139,8 +140,8 @@ inline int uv_accessor(GlbBuilder& b, const std::vector<Vec2f>& uv) {
   return b.accessor(b.view(t.data(), t.size() * 4, kArrayBuffer), kFloat, uv.size(), "VEC2");
 }
 
-/// The texture as glTF's "images" (a PNG in the binary chunk), "textures" and "samplers" entries (bilinear,
-/// mipmapped, repeating: the sampler the colours were measured with); returns the texture's index.
+/// The texture as glTF's "images" (a PNG in the binary chunk), "textures" and "samplers" entries (bilinear and
+/// repeating, as measure_look samples it, and mipmapped, as a viewer minifies it); returns the texture's index.
 Result<int> add_texture(GlbBuilder& b, json& doc, const MeshTexture& t);
 
 /// The opaque liquid in its target's texture: baseColorTexture `texture` times the texture's factor.

@@ -70,7 +70,8 @@ struct GlbOptions {
 /// The mesh animation as one GLB: one node per frame under a root node, switched by a STEP-interpolated scale
 /// animation (frame k has scale 1 from its time until the next frame's, 0 otherwise), so it plays in three.js,
 /// Blender and Unity without plugins. Without the animation (a static viewer) only the last frame shows.
-/// Empty frames get a node without a mesh.
+/// Empty frames get a node without a mesh. A frame with colours carries COLOR_0; one with a texture (corner_uv)
+/// carries TEXCOORD_0 instead, split at its UV seams, with the texture embedded once as PNG under its own material.
 Result<std::vector<std::uint8_t>> encode_glb(std::span<const TriangleMesh> frames, const GlbOptions& options);
 Status write_glb(const std::filesystem::path& path, std::span<const TriangleMesh> frames, const GlbOptions& options);
 

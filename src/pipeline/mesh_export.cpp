@@ -119,8 +119,9 @@ Result<float> frame_spacing(const io::ParticleFrame& last, const fs::path& file,
   return d;
 }
 
-// Reconstructs the chosen frames (and writes their OBJs), several at once, one thread each: reconstruct() is
-// deterministic for any thread count, so the meshes do not depend on how frames are spread.
+// Reconstructs the chosen frames (and writes their VDBs; the OBJs are written once the look is chosen), several at
+// once, one thread each: reconstruct() is deterministic for any thread count, so the meshes do not depend on how
+// frames are spread.
 // Per triangle, the target of the particle nearest to its centre (within 2d; farther, or free fluid: the target of
 // the nearest targeted particle within that range, else 0), for per-target materials.
 std::vector<std::uint8_t> triangle_targets(const io::TriangleMesh& m, const io::ParticleFrame& f, float d,
@@ -219,9 +220,13 @@ Result<std::vector<io::TriangleMesh>> reconstruct_frames(std::span<const fs::pat
 // unless they keep clearly more of the target's look there.
 LookMeasure pick_look(std::vector<io::TriangleMesh>& meshes, const MeshOptions& o, double final_time) {
   LookMeasure m;
-  if (o.looks == nullptr || meshes.empty() || meshes.back().corner_uv.empty()) return m;
-  m = measure_look(*o.looks, meshes.back(), final_time);
-  const bool uvs = m.uvs_win();
+  if (o.looks != nullptr && !meshes.empty() && !meshes.back().corner_uv.empty())
+    m = measure_look(*o.looks, meshes.back(), final_time);
+  const bool uvs = m.uvs_win();  // not measured (no UVs, or a last frame with no surface): no frame keeps UVs
+  if (m.points == 0) {
+    for (io::TriangleMesh& mesh : meshes) mesh.corner_uv.clear(), mesh.texture.reset();
+    return m;
+  }
   spdlog::info("mesh: the liquid's look as {} (against the target's colour between the vertices of the final mesh: "
                "UVs {:.2f}, vertex colours {:.2f} sRGB steps, mean over {} points)",
                uvs ? "UVs into its target's texture" : "vertex colours", m.uvs, m.vertex_colours, m.points);
@@ -230,13 +235,23 @@ LookMeasure pick_look(std::vector<io::TriangleMesh>& meshes, const MeshOptions& 
   return m;
 }
 
-// The OBJs' texture beside them (OUT/mesh/liquid_texture.png), and their MTL naming it.
-Status write_obj_texture(const fs::path& out, const io::MeshTexture& t) {
+// The material every OBJ names (OUT/mesh/water.mtl; Blender's OBJ importer reads it into a Principled BSDF) and, when
+// the meshes have UVs, their texture beside it (OUT/mesh/liquid_texture.png, which an earlier export may have left
+// otherwise). Returns the PNG's size (the same bytes animation.glb embeds), 0 without one. Written once the meshes are
+// made, so a failed export leaves an earlier one's OBJs and material together.
+Result<std::size_t> write_obj_material(const fs::path& out, const io::MeshTexture* t) {
+  if (t == nullptr) {
+    std::error_code gone;
+    fs::remove(out / "mesh" / kTextureName, gone);
+    FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
+    return std::size_t{0};
+  }
   io::Picture p;
-  p.width = t.image.width, p.height = t.image.height, p.rgb = t.image.rgb;
+  p.width = t->image.width, p.height = t->image.height, p.rgb = t->image.rgb;
   FF_TRY(const std::vector<std::uint8_t> png, io::encode_png(p));
   FF_CHECK(io::write_file_atomic(out / "mesh" / kTextureName, png));
-  return io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{}, kTextureName, t.factor));
+  FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{}, kTextureName, t->factor)));
+  return png.size();
 }
 
 // The chosen frames' OBJs (OUT/mesh/frame_NNNNN.obj), several at once.
@@ -291,7 +306,7 @@ Status write_point_cache(std::span<const fs::path> frames, const io::ParticleFra
 // animation is too large.
 constexpr std::size_t kPageFrames = 30;
 Status write_page_animation(const fs::path& out, const std::vector<io::TriangleMesh>& meshes, const io::GlbOptions& g,
-                            std::size_t full_bytes) {
+                            std::size_t full_bytes) {  // without the bytes of an embedded texture (the copy has none)
   const core::Stopwatch watch;
   std::size_t triangles = 0;
   for (const auto& m : meshes) triangles += m.triangles.size();
@@ -309,7 +324,6 @@ Status write_page_animation(const fs::path& out, const std::vector<io::TriangleM
     io::TriangleMesh d;
     if (m.triangles.size() <= budget) {
       d = m;
-      d.corner_uv.clear(), d.texture.reset();  // the page's copy is light: vertex colours, no texture image
     } else if (g.triangle_material.empty() && surface::check_mesh(m).ok_allowing_cavities()) {
       surface::DecimateParams p;
       p.max_triangles = std::max<std::size_t>(budget, 200);
@@ -317,6 +331,7 @@ Status write_page_animation(const fs::path& out, const std::vector<io::TriangleM
       d = surface::decimate(m, p);
       surface::carry_colours(m, d);
     }
+    d.corner_uv.clear(), d.texture.reset();  // the page's copy is light: vertex colours, no texture image
     if (d.triangles.empty() != m.triangles.empty() || d.triangles.size() > 2 * std::max<std::size_t>(budget, 200)) continue;
     lg.times.push_back(g.times.empty() ? double(k) / g.fps : g.times[k]);
     if (!g.triangle_material.empty()) lg.triangle_material.push_back(g.triangle_material[k]);
@@ -363,10 +378,6 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     if (!io::vdb_available()) return param_error("--vdb: this build has no OpenVDB (install libopenvdb-dev and rebuild)");
     FF_CHECK(io::ensure_writable_dir(out / "vdb"));
   }
-  // The water material every OBJ names (Blender's OBJ importer reads it into a Principled BSDF).
-  FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
-  std::error_code gone;
-  fs::remove(out / "mesh" / kTextureName, gone);  // an earlier export's texture: written again below if UVs win
 
   const std::vector<std::size_t> chosen = chosen_frames(frames.size(), o);
   auto last = io::read_particles_ply(frames.back());
@@ -380,7 +391,7 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
   sum.frames_meshed = chosen.size();
   const long last_k = io::frame_number(frames.back());
   sum.look = pick_look(meshes, o, double(last_k >= 0 ? last_k : static_cast<long>(frames.size() - 1)) / o.fps);
-  if (!meshes.back().corner_uv.empty()) FF_CHECK(write_obj_texture(out, *meshes.back().texture));
+  FF_TRY(const std::size_t texture_bytes, write_obj_material(out, meshes.back().corner_uv.empty() ? nullptr : meshes.back().texture.get()));
   if (o.frame_objs && !o.final_only) FF_CHECK(write_frame_objs(frames, chosen, meshes, out));
 
   const io::TriangleMesh& fin = meshes.back();
@@ -419,7 +430,7 @@ Result<MeshSummary> export_meshes(std::span<const fs::path> frames, const fs::pa
     // The page's copy is derived from this animation.glb: an earlier run's is removed first.
     std::error_code ec;
     fs::remove(out / kPageAnimationFile, ec);
-    if (glb.size() > kPageAnimationBytes) FF_CHECK(write_page_animation(out, meshes, g, glb.size()));
+    if (glb.size() > kPageAnimationBytes) FF_CHECK(write_page_animation(out, meshes, g, glb.size() - std::min(glb.size(), texture_bytes)));
   }
   if (o.pc2 && !o.final_only) FF_CHECK(write_point_cache(frames, *last, out));
   sum.seconds = watch.seconds();

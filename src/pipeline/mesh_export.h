@@ -5,6 +5,7 @@
 //   OUT/mesh/frame_NNNNN.obj   one mesh per meshed frame (NNNNN: the particle frame's number)
 //   OUT/mesh/final.obj         the last frame's mesh: the editable mesh for Blender, Mixamo, Unity
 //   OUT/mesh/water.mtl         the water material the OBJs name (io::WaterMaterial; the GLB carries the same)
+//   OUT/mesh/liquid_texture.png  the target's texture the OBJs' UVs index, when the liquid wears it (liquid_look.h)
 //   OUT/animation.glb          the meshed frames as one glTF 2.0 mesh animation (io/write_mesh.h)
 //   OUT/particles.pc2          every particle frame as a Blender point cache, played by the Mesh Cache modifier
 //   OUT/particles_frame0.ply   on this point mesh (the first frame's particles)

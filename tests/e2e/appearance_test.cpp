@@ -167,9 +167,15 @@ TEST(Appearance, TheFormedDuckWearsItsTextureAtTheNearestPoint) {
 
   EXPECT_EQ(m2.uv, m.uv);
 
-  // The GLB: validator-clean, and three.js shows the duck's texture through the UVs.
+  // The GLB: validator-clean, and three.js shows the duck's texture through the UVs: the OBJ's UVs (checked against
+  // the texture above) with v turned to glTF's convention, over the same vertices.
   nlohmann::json j;
   ASSERT_NO_FATAL_FAILURE(check_coloured_glb(dir / "out" / "animation.glb", j, {512, 512}));
+  EXPECT_EQ(j["three"]["texture_last"]["uvs"], m.uv.size()) << j.dump();
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& t : m.uv) mean += t.cast<double>() / double(m.uv.size());
+  EXPECT_NEAR(j["three"]["texture_last"]["uv_mean"][0].get<double>(), mean.x(), 1e-4) << j.dump();
+  EXPECT_NEAR(j["three"]["texture_last"]["uv_mean"][1].get<double>(), 1.0 - mean.y(), 1e-4) << j.dump();
 }
 
 // Blender (Debian's 3.4, headless) imports the liquid's look as an artist opens it, in one Blender session:
@@ -190,6 +196,8 @@ TEST(Appearance, BlenderImportsTheColouredLiquid) {
                              "--mesh-every", "10", "-q"});
     ASSERT_EQ(r.code, 0) << r.err;
   }
+  ASSERT_NE(e2e::read_file(dir / "out" / "mesh" / "final.obj").find("\nvt "), std::string::npos)
+      << "the run wrote vertex colours only: its log says why (the measure of UVs against vertex colours)";
   const auto [rc, out] = test::shell(
       "PATH=/usr/bin:$PATH timeout 600 blender -b --factory-startup -noaudio --python-exit-code 1 -P '" +
       (test::source_dir() / "scripts" / "blender_colour_check.py").string() + "' -- --glb '" +
