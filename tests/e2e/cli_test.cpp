@@ -634,5 +634,24 @@ TEST(Cli, RerunsClearTheTemporaryFilesAKilledCommandLeft) {
   EXPECT_FALSE(fs::exists(out / "particles" / ("frame_00003.ply" + dead)));
   e2e::expect_no_temp_files(out);
 }
+// A target modelled a few centimetres small (the Collada duck at scale 0.01, 1.6 cm) is as slow as real water that
+// small: surface tension's capillary sub-step alone wants more sub-steps than solver.max_substeps, and the run says so
+// (and what to do) in one line instead of blaming the particles' speed; with the capillary condition off it does not.
+TEST(Cli, ATinySceneSaysSurfaceTensionWantsTheSubSteps) {
+  const fs::path dir = test::temp_dir("cli-tiny");
+  const std::string duck = "/usr/share/assimp/models/Collada/duck.dae";
+  const auto scene = [&](const std::string& solver) {
+    return R"({"targets": [{"mesh": ")" + duck + R"(", "scale": 0.01}], "sampling": {"auto_count": 1500, "max_auto_count": 1500})" +
+           solver + "}";
+  };
+  const auto r = e2e::run({"run", write_scene(dir, scene("")).string(), "-o", (dir / "out").string(), "--frames", "2", "--no-mesh"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("surface tension at this spacing"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("solver.capillary_cfl = 0"), std::string::npos) << r.err;
+  const auto off = e2e::run({"run", write_scene(dir, scene(R"(, "solver": {"capillary_cfl": 0})"), "off.json").string(), "-o",
+                             (dir / "off").string(), "--frames", "2", "--no-mesh"});
+  ASSERT_EQ(off.code, 0) << off.err;
+  EXPECT_EQ(off.err.find("surface tension at this spacing"), std::string::npos) << off.err;
+}
 }  // namespace
 }  // namespace ff
