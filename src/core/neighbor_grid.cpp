@@ -191,8 +191,8 @@ std::size_t NeighborGrid::place_cells(std::span<const Vec3f> points, int T) {
   origin_ = ((box.min / radius_).array().floor() - 2.0f).matrix() * radius_;
   const Vec3f ext = (box.max - origin_) / radius_;
   const double cells = (std::floor(double(ext.x())) + 2) * (std::floor(double(ext.y())) + 2) * (std::floor(double(ext.z())) + 2);
-  // Dense keys while the box has at most ~2 cells per point: the cell table stays O(N).
-  hashed_ = cells > 2.0 * double(n) + 4096.0;
+  // Dense keys while the box has at most a few cells per point (the constructor's limit): the cell table stays O(N).
+  hashed_ = cells > dense_cells_per_point_ * double(n) + 4096.0;
   identity_order_ = false;
   std::size_t cell_count;
   if (!hashed_) {
@@ -381,6 +381,38 @@ void NeighborGrid::neighbors(std::span<const Vec3f> points, NeighborList& out) c
 void NeighborGrid::query(std::span<const Vec3f> binned, std::span<const Vec3f> queries, float r,
                          NeighborList& out) const {
   gather<false, false>(binned, queries, std::min(r, radius_), out);
+}
+
+void NeighborGrid::any_within(std::span<const Vec3f> binned, std::span<const Vec3f> queries, float r,
+                              std::vector<std::uint8_t>& hit) const {
+  const float r2 = std::min(r, radius_) * std::min(r, radius_);
+  hit.assign(queries.size(), 0);
+  if (cell_count() == 0) return;
+  parallel_for(static_cast<std::int64_t>(queries.size()), [&](std::int64_t qi) {
+    const Vec3f xq = queries[static_cast<std::size_t>(qi)];
+    if (!xq.allFinite()) return;
+    auto in_cell = [&](Index key) {
+      for (Index p = cell_start_[key]; p < cell_start_[key + 1]; ++p)
+        if ((binned[sorted_[p]] - xq).squaredNorm() < r2) return true;
+      return false;
+    };
+    const Vec3i c = cell_of(xq);
+    // The query's own cell holds its nearest point most often; a cell outside a dense grid holds none.
+    const bool inside = hashed_ || (c.x() >= 0 && c.y() >= 0 && c.z() >= 0 && c.x() < dims_.x() && c.y() < dims_.y() &&
+                                    c.z() < dims_.z());
+    const Index own = inside ? key_of(c) : 0;
+    if (inside && in_cell(own)) {
+      hit[static_cast<std::size_t>(qi)] = 1;
+      return;
+    }
+    Index keys[27];
+    const int nk = neighbor_keys(c, keys);
+    for (int k = 0; k < nk; ++k)
+      if (!(inside && keys[k] == own) && in_cell(keys[k])) {
+        hit[static_cast<std::size_t>(qi)] = 1;
+        return;
+      }
+  });
 }
 
 std::vector<Index> inverse_permutation(std::span<const Index> perm) {

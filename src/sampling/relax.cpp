@@ -34,6 +34,10 @@ void push_inside(std::span<Vec3f> x, const SdfGrid& sdf, float depth) {
 
 namespace {
 
+// The repair's grids have cells of 0.85–0.88 d, smaller than the spacing: a bunny's box holds ~4 of them per sample,
+// past the grid's default limit for dense keys, and hashed keys made the repair 4× slower at 1M samples.
+constexpr double kRepairCellsPerSample = 8.0;
+
 // Cell-sorts x (the grid built on it) and finds its neighbour lists within the grid's radius.
 void sort_and_find_neighbors(std::vector<Vec3f>& x, core::NeighborGrid& grid, core::NeighborList& nb,
                              std::vector<Vec3f>& scratch) {
@@ -48,7 +52,7 @@ void sort_and_find_neighbors(std::vector<Vec3f>& x, core::NeighborGrid& grid, co
 void separate_close_pairs(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_distance, core::NeighborList& nb,
                           std::vector<Vec3f>& scratch) {
   const float target = 1.03f * min_distance, depth = 0.0f;
-  core::NeighborGrid grid(target);
+  core::NeighborGrid grid(target, kRepairCellsPerSample);
   std::vector<Vec3f> delta(x.size());
   const float m2 = min_distance * min_distance;
   for (int sweep = 0; sweep < 10; ++sweep) {
@@ -88,7 +92,7 @@ void separate_close_pairs(std::vector<Vec3f>& x, const SdfGrid& sdf, float min_d
 std::vector<Vec3f> drop_close_samples(std::vector<Vec3f>& x, float min_distance, core::NeighborList& nb,
                                       std::vector<Vec3f>& scratch) {
   const float m2 = min_distance * min_distance;
-  core::NeighborGrid grid(min_distance);
+  core::NeighborGrid grid(min_distance, kRepairCellsPerSample);
   sort_and_find_neighbors(x, grid, nb, scratch);
   std::vector<std::uint8_t> keep(x.size(), 1);
   for (std::size_t i = 0; i < x.size(); ++i)
@@ -107,7 +111,7 @@ std::vector<Vec3f> drop_close_samples(std::vector<Vec3f>& x, float min_distance,
 // Step 3: an inside grid node with no sample within min_distance gets one (greedily, in node order, each new sample
 // at least min_distance from all others). This is where thin tips get covered. Returns the new samples.
 std::vector<Vec3f> fill_gaps(const std::vector<Vec3f>& kept, const SdfGrid& sdf, float min_distance,
-                             std::span<const Vec3f> surface, core::NeighborList& nb) {
+                             std::span<const Vec3f> surface) {
   const float m2 = min_distance * min_distance;
   std::vector<Vec3f> nodes;
   for (int k = 0; k < sdf.dims.z(); ++k)
@@ -119,7 +123,7 @@ std::vector<Vec3f> fill_gaps(const std::vector<Vec3f>& kept, const SdfGrid& sdf,
           nodes.push_back(sdf.node(i, j, k));
   // Surface points reach into tips thinner than the node spacing.
   nodes.insert(nodes.end(), surface.begin(), surface.end());
-  core::NeighborGrid kg(min_distance);
+  core::NeighborGrid kg(min_distance, kRepairCellsPerSample);
   kg.build(kept);
   constexpr std::size_t kChunk = std::size_t(1) << 16;
   std::vector<Vec3f> fresh;
@@ -128,11 +132,14 @@ std::vector<Vec3f> fill_gaps(const std::vector<Vec3f>& kept, const SdfGrid& sdf,
     return (std::uint64_t(std::uint32_t(c.x()) & 0x1FFFFF) << 42) | (std::uint64_t(std::uint32_t(c.y()) & 0x1FFFFF) << 21) |
            std::uint64_t(std::uint32_t(c.z()) & 0x1FFFFF);
   };
+  std::vector<std::uint8_t> covered;
   for (std::size_t a = 0; a < nodes.size(); a += kChunk) {
     const std::size_t b = std::min(nodes.size(), a + kChunk);
-    kg.query(kept, std::span<const Vec3f>(nodes).subspan(a, b - a), min_distance, nb);
+    // "Is any kept sample within min_distance?" stops at the first one (listing them all was most of the 1M
+    // bunny's repair: 9.2 s, 5.5 s with this alone).
+    kg.any_within(kept, std::span<const Vec3f>(nodes).subspan(a, b - a), min_distance, covered);
     for (std::size_t q = a; q < b; ++q) {
-      if (!nb.of(q - a).empty()) continue;
+      if (covered[q - a]) continue;
       // Check against the samples added so far (a hash of their cells: thin targets add thousands).
       const Vec3f p = nodes[q];
       const Vec3i c = (p / min_distance).array().floor().cast<int>();
@@ -169,7 +176,7 @@ std::size_t enforce_spacing(std::vector<Vec3f>& x, const SdfGrid& sdf, float min
   std::vector<Vec3f> kept = drop_close_samples(x, min_distance, nb, scratch);
   const std::size_t dropped = x.size() - kept.size();
   // 3. Fill.
-  const std::vector<Vec3f> fresh = fill_gaps(kept, sdf, min_distance, surface, nb);
+  const std::vector<Vec3f> fresh = fill_gaps(kept, sdf, min_distance, surface);
   const std::size_t inserted = fresh.size();
   kept.insert(kept.end(), fresh.begin(), fresh.end());
   x.swap(kept);

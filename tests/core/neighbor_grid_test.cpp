@@ -85,6 +85,50 @@ TEST(NeighborGrid, QueryOtherSetEqualsBruteForce) {
   expect_equal(nl, brute_force(p, q, 0.07f, false));
 }
 
+// any_within is query() asked only "is there one?": both grids (dense and hashed keys), queries outside the box.
+TEST(NeighborGrid, AnyWithinAgreesWithTheFullQuery) {
+  for (const bool hashed : {false, true}) {
+    const auto p = hashed ? clustered_points(4000, 7) : random_points(2000, 1.0f, 8);
+    // Queries around the same clusters (a copy of the points, jittered) or over a box larger than the points'.
+    auto q = hashed ? clustered_points(3000, 7) : random_points(3000, 1.4f, 10);
+    std::mt19937 rng(12);
+    std::normal_distribution<float> jitter(0.0f, 0.03f);
+    for (auto& x : q) x += hashed ? Vec3f(jitter(rng), jitter(rng), jitter(rng)) : Vec3f::Constant(-0.2f);
+    const float r = hashed ? 0.03f : 0.07f;
+    NeighborGrid grid(hashed ? 0.03f : 0.1f);
+    grid.build(p);
+    ASSERT_EQ(grid.hashed(), hashed);
+    std::vector<std::uint8_t> hit;
+    grid.any_within(p, q, r, hit);
+    ASSERT_EQ(hit.size(), q.size());
+    const auto want = brute_force(p, q, r, false);
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      EXPECT_EQ(hit[i] != 0, !want[i].empty()) << "query " << i << (hashed ? " (hashed)" : " (dense)");
+      hits += hit[i];
+    }
+    EXPECT_GT(hits, q.size() / 20) << "the sets must be close enough for hits";
+    EXPECT_LT(hits, q.size()) << "and sparse enough for misses";
+  }
+}
+
+// The dense-key limit is the caller's: a grid that would hash by default stays dense with a higher limit, and its
+// lists are exact either way.
+TEST(NeighborGrid, AHigherDenseLimitKeepsKeysDenseAndListsExact) {
+  const auto p = random_points(3000, 1.0f, 11);
+  const float r = 0.04f;  // (1/0.04)^3 ≈ 15 600 cells for 3 000 points: past 2 per point
+  NeighborGrid hashed(r), dense(r, 8.0);
+  hashed.build(p);
+  dense.build(p);
+  EXPECT_TRUE(hashed.hashed());
+  EXPECT_FALSE(dense.hashed());
+  NeighborList a, b;
+  hashed.neighbors(p, a);
+  dense.neighbors(p, b);
+  expect_equal(a, brute_force(p, p, r, true));
+  expect_equal(b, brute_force(p, p, r, true));
+}
+
 TEST(NeighborGrid, SortedOrderThenNeighborsStillExact) {
   auto p = random_points(2500, 0.7f, 5);
   NeighborGrid grid(0.06f);
