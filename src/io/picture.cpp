@@ -110,20 +110,32 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
   return pic;
 }
 
-Result<std::vector<std::uint8_t>> encode_png(const Picture& picture) {
+namespace {
+
+Result<std::vector<std::uint8_t>> encode_rgb(int width, int height, const std::uint8_t* rgb) {
   png_image img{};
   img.version = PNG_IMAGE_VERSION;
-  img.width = static_cast<png_uint_32>(picture.width);
-  img.height = static_cast<png_uint_32>(picture.height);
+  img.width = static_cast<png_uint_32>(width);
+  img.height = static_cast<png_uint_32>(height);
   img.format = PNG_FORMAT_RGB;
   png_alloc_size_t size = 0;
-  if (!png_image_write_get_memory_size(img, size, 0, picture.rgb.data(), 0, nullptr))
+  if (!png_image_write_get_memory_size(img, size, 0, rgb, 0, nullptr))
     return io_error(fmt::format("PNG encoding failed: {}", img.message));
   std::vector<std::uint8_t> out(size);
-  if (!png_image_write_to_memory(&img, out.data(), &size, 0, picture.rgb.data(), 0, nullptr))
+  if (!png_image_write_to_memory(&img, out.data(), &size, 0, rgb, 0, nullptr))
     return io_error(fmt::format("PNG encoding failed: {}", img.message));
   out.resize(size);
   return out;
+}
+
+}  // namespace
+
+Result<std::vector<std::uint8_t>> encode_png(const Picture& picture) {
+  return encode_rgb(picture.width, picture.height, picture.rgb.data());
+}
+
+Result<std::vector<std::uint8_t>> encode_png(const Texture& texture) {
+  return encode_rgb(texture.width, texture.height, texture.rgb.data());
 }
 
 Result<Picture> decode_png(std::span<const std::uint8_t> bytes) {

@@ -36,6 +36,8 @@ Picture render_mesh(const TriangleMesh& mesh, const std::array<std::uint8_t, 3>&
 
 /// The picture as PNG bytes (libpng); an Io error when libpng fails.
 Result<std::vector<std::uint8_t>> encode_png(const Picture& picture);
+/// A texture as PNG bytes: the liquid's texture beside the OBJs and inside the GLBs, one encoder for both.
+Result<std::vector<std::uint8_t>> encode_png(const Texture& texture);
 /// PNG bytes back to RGB (for the tests); an Input error for bytes that are not a PNG.
 Result<Picture> decode_png(std::span<const std::uint8_t> bytes);
 

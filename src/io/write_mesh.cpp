@@ -68,9 +68,7 @@ UvSplit split_uv(const TriangleMesh& m) {
 }
 
 Result<int> add_texture(GlbBuilder& b, json& doc, const MeshTexture& t) {
-  Picture p;
-  p.width = t.image.width, p.height = t.image.height, p.rgb = t.image.rgb;
-  FF_TRY(const std::vector<std::uint8_t> png, encode_png(p));
+  FF_TRY(const std::vector<std::uint8_t> png, encode_png(t.image));
   for (const char* key : {"images", "textures", "samplers"})
     if (!doc.contains(key)) doc[key] = json::array();
   doc["images"].push_back({{"bufferView", b.view(png.data(), png.size())}, {"mimeType", "image/png"}});

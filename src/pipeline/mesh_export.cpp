@@ -223,13 +223,10 @@ LookMeasure pick_look(std::vector<io::TriangleMesh>& meshes, const MeshOptions& 
   if (o.looks != nullptr && !meshes.empty() && !meshes.back().corner_uv.empty())
     m = measure_look(*o.looks, meshes.back(), final_time);
   const bool uvs = m.uvs_win();  // not measured (no UVs, or a last frame with no surface): no frame keeps UVs
-  if (m.points == 0) {
-    for (io::TriangleMesh& mesh : meshes) mesh.corner_uv.clear(), mesh.texture.reset();
-    return m;
-  }
-  spdlog::info("mesh: the liquid's look as {} (against the target's colour between the vertices of the final mesh: "
-               "UVs {:.2f}, vertex colours {:.2f} sRGB steps, mean over {} points)",
-               uvs ? "UVs into its target's texture" : "vertex colours", m.uvs, m.vertex_colours, m.points);
+  if (m.points > 0)
+    spdlog::info("mesh: the liquid's look as {} (against the target's colour between the vertices of the final mesh: "
+                 "UVs {:.2f}, vertex colours {:.2f} sRGB steps, mean over {} points)",
+                 uvs ? "UVs into its target's texture" : "vertex colours", m.uvs, m.vertex_colours, m.points);
   if (!uvs)
     for (io::TriangleMesh& mesh : meshes) mesh.corner_uv.clear(), mesh.texture.reset();
   return m;
@@ -246,9 +243,7 @@ Result<std::size_t> write_obj_material(const fs::path& out, const io::MeshTextur
     FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{})));
     return std::size_t{0};
   }
-  io::Picture p;
-  p.width = t->image.width, p.height = t->image.height, p.rgb = t->image.rgb;
-  FF_TRY(const std::vector<std::uint8_t> png, io::encode_png(p));
+  FF_TRY(const std::vector<std::uint8_t> png, io::encode_png(t->image));
   FF_CHECK(io::write_file_atomic(out / "mesh" / kTextureName, png));
   FF_CHECK(io::write_file_atomic(out / "mesh" / kMtlName, io::encode_mtl(io::WaterMaterial{}, kTextureName, t->factor)));
   return png.size();
