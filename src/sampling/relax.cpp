@@ -35,7 +35,8 @@ void push_inside(std::span<Vec3f> x, const SdfGrid& sdf, float depth) {
 namespace {
 
 // The repair's grids have cells of 0.85–0.88 d, smaller than the spacing: a bunny's box holds ~4 of them per sample,
-// past the grid's default limit for dense keys, and hashed keys made the repair 4× slower at 1M samples.
+// past the grid's default limit for dense keys, and hashed keys made its separating and dropping 4–6× slower at 1M
+// samples.
 constexpr double kRepairCellsPerSample = 8.0;
 
 // Cell-sorts x (the grid built on it) and finds its neighbour lists within the grid's radius.
