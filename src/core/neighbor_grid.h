@@ -150,7 +150,7 @@ class NeighborGrid {
   /// `radius` (metres, > 0) is both the cell edge and the largest query radius. Cell keys are dense (a table of
   /// every cell of the points' box, and compact lists) while the box has at most `dense_cells_per_point` cells per
   /// point, else hashed. 2 suits cells about the size of the spacing; a grid of cells smaller than the spacing (the
-  /// sampler's spacing repair, 0.85 d) has ~4 per point in a bunny's box, where hashing made it 4–6× slower.
+  /// sampler's spacing repair, 0.85 d) has ~6 per point in a bunny's box, where hashing made it 4–6× slower.
   explicit NeighborGrid(float radius, double dense_cells_per_point = 2.0)
       : radius_(radius), dense_cells_per_point_(dense_cells_per_point) {}
 

@@ -34,7 +34,7 @@ void push_inside(std::span<Vec3f> x, const SdfGrid& sdf, float depth) {
 
 namespace {
 
-// The repair's grids have cells of 0.85–0.88 d, smaller than the spacing: a bunny's box holds ~4 of them per sample,
+// The repair's grids have cells of 0.85–0.88 d, smaller than the spacing: a bunny's box holds ~6 of them per sample,
 // past the grid's default limit for dense keys, and hashed keys made its separating and dropping 4–6× slower at 1M
 // samples.
 constexpr double kRepairCellsPerSample = 8.0;
