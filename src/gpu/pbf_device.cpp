@@ -154,7 +154,7 @@ PbfDevice::~PbfDevice() {
 
 std::size_t PbfDevice::bytes() const {
   return pos_.bytes() + next_.bytes() + cell_.bytes() + count_.bytes() + start_.bytes() + items_.bytes() +
-         density_.bytes() + lambda_.bytes() + x_.bytes() + vel_.bytes() + accel_.bytes();
+         density_.bytes() + lambda_.bytes() + x_.bytes() + vel_.bytes() + accel_.bytes() + omega_.bytes();
 }
 
 Status PbfDevice::set_predicted(std::span<const Vec3f> x) {
@@ -287,6 +287,7 @@ Status PbfDevice::prepare_substeps(const sim::PbfLambdaConsts& lk, const sim::Pb
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
   if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
+  if (fk.vorticity > 0.0f && omega_.bytes() == 0) FF_CHECK(make_vorticity_kernels());
   lk_ = lk;
   if (controller_) FF_CHECK(controller_->prepare_frame(time, fk.dt, steps));
   c = make_constants(grid_, n_, &lk, &dk);
@@ -360,9 +361,36 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   compute_barrier(cb);
   stamp(cb);
   record_sweeps(cb, &c, sweeps, stamp, dt);
+  if (fk.vorticity > 0.0f) {  // its passes need x of the sub-step's start, which the update overwrites
+    const VkBufferCopy all_x{0, 0, n_ * 16};
+    vkCmdCopyBuffer(cb, x_.handle(), next_.handle(), 1, &all_x);  // next_ is free once the sweeps are done
+    compute_barrier(cb);
+  }
   update_k_.dispatch(cb, &cs, groups(n_, 256));
   compute_barrier(cb);
+  if (fk.vorticity > 0.0f) record_vorticity(cb, c, fk);
   stamp(cb);
+}
+
+Status PbfDevice::make_vorticity_kernels() {
+  Context& ctx = *ctx_;
+  FF_TRY(omega_, DeviceBuffer::create(ctx, n_ * 16));
+  FF_TRY(vort_omega_k_, Kernel::create(ctx, "vort_omega", shaders::vort_omega(),
+                                       {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega_}));
+  FF_TRY(vort_apply_k_, Kernel::create(ctx, "vort_apply", shaders::vort_apply(),
+                                       {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega_}));
+  return {};
+}
+
+// After the update: ω from the new velocities at x (in next_), then v += Δt ε_v (N × ω), as the CPU's
+// PbfSolver::vorticity_confinement. c is the sweeps' block (h, m, Spiky kgrad); k2.y carries Δt ε_v.
+void PbfDevice::record_vorticity(VkCommandBuffer cb, const Constants& c, const sim::PbfForceConsts& fk) const {
+  Constants cv = c;
+  cv.k2[1] = fk.dt * fk.vorticity, cv.k2[3] = fk.dt;
+  vort_omega_k_.dispatch(cb, &cv, groups(n_, 128));
+  compute_barrier(cb);
+  vort_apply_k_.dispatch(cb, &cv, groups(n_, 128));
+  compute_barrier(cb);
 }
 
 Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,

@@ -198,6 +198,12 @@ class PbfDevice {
   Kernel st_estimate_k_, st_smooth_k_;
   Status prepare_points(int n);
   Status make_surface_kernels();
+  // Vorticity confinement (vort_omega.comp, vort_apply.comp), made on the first sub-step that asks for it: ω per
+  // particle, and the passes. They run after the update, on x copied out to next_ before it.
+  DeviceBuffer omega_;
+  Kernel vort_omega_k_, vort_apply_k_;
+  Status make_vorticity_kernels();
+  void record_vorticity(VkCommandBuffer cb, const Constants& c, const sim::PbfForceConsts& fk) const;
   Kernel count_k_, scan_k_, scatter_k_, order_k_, lambda_k_, delta_k_, force_k_, predict_k_, update_k_, check_k_;
   Kernel copy_k_, error_k_, decide_k_;
   DeviceController* controller_ = nullptr;

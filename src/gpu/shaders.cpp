@@ -119,6 +119,18 @@ std::span<const std::uint32_t> ctl_gather() {
   };
   return kWords;
 }
+std::span<const std::uint32_t> vort_omega() {
+  static constexpr std::uint32_t kWords[] = {
+#include "vort_omega.inc"
+  };
+  return kWords;
+}
+std::span<const std::uint32_t> vort_apply() {
+  static constexpr std::uint32_t kWords[] = {
+#include "vort_apply.inc"
+  };
+  return kWords;
+}
 std::span<const std::uint32_t> pbf_copy() {
   static constexpr std::uint32_t kWords[] = {
 #include "pbf_copy.inc"

@@ -19,6 +19,8 @@ std::span<const std::uint32_t> density_error();
 std::span<const std::uint32_t> density_decide();
 std::span<const std::uint32_t> st_estimate();
 std::span<const std::uint32_t> st_smooth();
+std::span<const std::uint32_t> vort_omega();
+std::span<const std::uint32_t> vort_apply();
 std::span<const std::uint32_t> pbf_predict();
 std::span<const std::uint32_t> ctl_fill();
 std::span<const std::uint32_t> ctl_bonds();

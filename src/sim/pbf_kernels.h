@@ -39,6 +39,7 @@ struct PbfForceConsts {
   // (surface_tension_step_key of its start time: the caller's, it depends on the time).
   float st_sigma = 0, st_samples_per_second = 0;
   std::uint64_t st_key = 0;
+  float vorticity = 0;  // vorticity confinement ε_v, m/s (0: none; the GPU's passes, PbfSolver::vorticity_confinement)
 };
 
 /// λ at x* (s.x/y/z): density[point] per particle, lambda in s's padded layout (0 at padding).

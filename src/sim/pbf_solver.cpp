@@ -347,6 +347,7 @@ PbfDeltaConsts PbfSolver::delta_consts() const {
 PbfForceConsts PbfSolver::force_consts(float dt) const {
   PbfForceConsts fk;
   fk.gravity = params_.gravity, fk.dt = dt, fk.xsph = params_.viscosity / dt, fk.mass_poly6_k = mass_ * poly6_.k;
+  fk.vorticity = params_.vorticity;
   if (params_.drag > 0.0f) {
     const DragModel::Coefficients c = DragModel(drag_params(params_, mass_)).coefficients();
     fk.drag_L = c.L, fk.drag_y = c.y_coeff, fk.drag_re = c.re_coeff, fk.drag_d2 = c.d2, fk.drag_acc = c.acc;

@@ -310,6 +310,43 @@ TEST(GpuPbf, SubstepsTrackTheCpuSolver) {
   expect_silent(*ctx);
 }
 
+// Vorticity confinement (sim/pbf_solver.cpp, vorticity_confinement) on the device: the same sub-steps of the splashing
+// block with ε_v = 2 m/s track the CPU's, and the confinement changes the velocities far more than the paths differ.
+TEST(GpuPbf, VorticityConfinementTracksTheCpuSolver) {
+  sim::SolverParams sp;
+  sp.particle_radius = 0.008f;
+  sp.surface_tension = 0.0f;
+  sp.vorticity = 2.0f;
+  const sim::Domain dom{Vec3f::Zero(), Vec3f(0.5f, 0.5f, 0.8f)};
+  const sim::ParticleSet start = dropped_block(sp, dom);
+  sp.max_iterations = sp.iterations;
+  constexpr float kDt = 1e-3f;
+  constexpr int kSteps = 3;
+  auto ctx = make_context();
+  ASSERT_TRUE(ctx);
+  const SubstepRun r = run_substeps(sp, dom, start, kDt, kSteps, *ctx);
+  sim::SolverParams without = sp;
+  without.vorticity = 0.0f;
+  const SubstepRun r0 = run_substeps(without, dom, start, kDt, kSteps, *ctx);
+  ASSERT_EQ(r.gx.size(), start.size());
+  std::vector<double> dx(r.gx.size());
+  double dv = 0, effect = 0;
+  for (std::size_t i = 0; i < r.gx.size(); ++i) {
+    dx[i] = (r.gx[i] - r.cx[i]).norm() / sp.spacing();
+    dv = std::max(dv, double((r.gv[i] - r.cv[i]).norm()));
+    effect = std::max(effect, double((r.cv[i] - r0.cv[i]).norm()));
+  }
+  std::sort(dx.begin(), dx.end());
+  std::printf("%d sub-steps with vorticity confinement: GPU − CPU |Δx|/d median %.2e, largest %.2e; largest |Δv| %.2e "
+              "m/s, where the confinement changed velocities by up to %.2e m/s\n",
+              kSteps, dx[dx.size() / 2], dx.back(), dv, effect);
+  EXPECT_LT(dx[dx.size() / 2], 1e-5);
+  EXPECT_LT(dx.back(), 1e-3);
+  EXPECT_GT(effect, 1e-3);
+  EXPECT_LT(dv, 1e-2 * effect);
+  expect_silent(*ctx);
+}
+
 // Air drag where it is strong: spray (particles with few or no neighbours) flying at 5 m/s, at the largest drag
 // scale. The drag slows it measurably, and the device's drag matches the CPU's.
 // Surface tension (Zorilla et al.: classifier, Monte-Carlo normal and curvature with the CPU's random rotations bit for
