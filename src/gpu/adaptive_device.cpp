@@ -43,8 +43,6 @@ std::string unsupported(const std::vector<control::ControlTarget>& targets, cons
   for (std::size_t t = 0; t < targets.size(); ++t) {
     const control::ControlTarget& c = targets[t];
     if (!c.swaps.empty()) return fmt::format("a morphing target (target {})", t);
-    if (!c.strength.keys.empty()) return fmt::format("a strength track (target {})", t);
-    if (c.start > 0.0) return fmt::format("a target that starts later (target {} at {} s)", t, c.start);
   }
   return {};
 }
@@ -58,6 +56,8 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   if (const std::string what = unsupported(targets, params); !what.empty())
     return param_error("the GPU controller does not do " + what + " yet; run it with --device cpu");
   std::unique_ptr<AdaptiveDevice> a(new AdaptiveDevice());
+  a->timed_ = std::any_of(targets.begin(), targets.end(),
+                          [](const control::ControlTarget& t) { return t.start > 0.0 || !t.strength.keys.empty(); });
   control::ControlSamples& samples = a->samples_;
   FF_CHECK(samples.init(std::move(targets), "adaptive (GPU)",
                         {.cell_order = false, .weights = params.weights, .normals = true, .velocities = true}));
@@ -76,61 +76,74 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   const double rho_ref = sampling::lattice_density(d, a->hc_, ctx.rest_density);
   a->eps_c_ = static_cast<float>(params.epsilon * control::full_gradient_sum(d, a->hc_, ctx.particle_mass, rho_ref));
 
+  FF_CHECK(a->make_buffers());
   Context& c = fluid.context();
-  const std::size_t m = a->m_, n = fluid.size();
-  FF_TRY(a->s_pos_, DeviceBuffer::create(c, m * 16));
-  FF_TRY(a->s_normal_, DeviceBuffer::create(c, m * 16));
-  FF_TRY(a->s_rho_c_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->s_phi_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->s_target_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->s_fill_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->s_bond_r2_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->s_coef_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(a->f_target_, DeviceBuffer::create(c, n * 4));
-  FF_TRY(a->nearest_, DeviceBuffer::create(c, n * 4));
-  FF_TRY(a->s_vel_, DeviceBuffer::create(c, m * 16));
-  FF_TRY(a->t_moving_, DeviceBuffer::create(c, samples.targets() * 4));
-  {
-    const std::vector<float> zero(4 * m, 0.0f);
-    FF_CHECK(a->s_vel_.upload(zero.data(), zero.size() * 4));
-    std::vector<std::uint32_t> moving(samples.targets());
-    for (std::size_t t = 0; t < moving.size(); ++t) moving[t] = samples.moving(static_cast<std::uint8_t>(t)) ? 1u : 0u;
-    FF_CHECK(a->t_moving_.upload(moving.data(), moving.size() * 4));
-  }
-  const std::vector<float> pos = packed(samples.position), nrm = packed(samples.normal);
-  const std::vector<std::uint32_t> target(samples.target.begin(), samples.target.end());
-  FF_CHECK(a->s_pos_.upload(pos.data(), pos.size() * 4));
-  FF_CHECK(a->s_normal_.upload(nrm.data(), nrm.size() * 4));
-  FF_CHECK(a->s_rho_c_.upload(samples.rho_c.data(), m * 4));
-  FF_CHECK(a->s_phi_.upload(samples.phi.data(), m * 4));
-  FF_CHECK(a->s_target_.upload(target.data(), m * 4));
-  const std::vector<std::uint32_t> zero(n, 0);
-  FF_CHECK(a->f_target_.upload(zero.data(), n * 4));
-  FF_TRY(a->s_grid_, fluid.sort_into_grid(a->s_pos_, m));
-
   const DeviceBuffer &fx = fluid.x_buffer(), &fpos = fluid.predicted_buffer(), &fcell = fluid.cell_buffer(),
                      &fstart = fluid.start_buffer(), &fitems = fluid.items_buffer();
   const PbfDevice::PointGrid& sg = a->s_grid_;
   FF_TRY(a->fill_k_, Kernel::create(c, "ctl_fill", shaders::ctl_fill(),
                                     {&a->s_pos_, &sg.cell, &a->s_rho_c_, &a->s_target_, &fx, &fstart, &fitems, &a->f_target_,
-                                     &a->s_fill_, &a->s_bond_r2_}));
+                                     &a->s_fill_, &a->s_bond_r2_, &a->t_strength_}));
   FF_TRY(a->bonds_k_, Kernel::create(c, "ctl_bonds", shaders::ctl_bonds(),
                                      {&fx, &fcell, &a->f_target_, &a->s_pos_, &sg.start, &sg.items, &a->s_target_,
                                       &a->s_bond_r2_, &a->nearest_}));
   FF_TRY(a->accel_k_, Kernel::create(c, "ctl_accel", shaders::ctl_accel(),
                                      {&a->nearest_, &a->s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer(),
-                                      &a->f_target_, &a->s_vel_, &a->t_moving_}));
+                                      &a->f_target_, &a->s_vel_, &a->t_moving_, &a->t_strength_}));
   FF_TRY(a->spring_k_, Kernel::create(c, "ctl_spring", shaders::ctl_spring(),
                                       {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                       &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos, &a->s_vel_}));
+                                       &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos, &a->s_vel_, &a->t_strength_}));
   FF_TRY(a->lambda_k_, Kernel::create(c, "ctl_lambda", shaders::ctl_lambda(),
                                       {&a->s_pos_, &sg.cell, &a->s_rho_c_, &a->s_target_, &a->s_phi_, &fx, &fpos, &fstart,
-                                       &fitems, &a->f_target_, &a->s_coef_, &a->s_vel_}));
+                                       &fitems, &a->f_target_, &a->s_coef_, &a->s_vel_, &a->t_strength_}));
   FF_TRY(a->correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
                                        {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
                                         &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos, &a->s_vel_}));
   if (params.gather) FF_CHECK(a->make_seed_field(samples.targets()));
   return a;
+}
+
+// The samples' buffers and the fluid's per-particle ones, filled from samples_ (the fluid's targets: 0 until
+// set_fluid_targets), and the samples sorted into the fluid grid's cells.
+Status AdaptiveDevice::make_buffers() {
+  Context& c = fluid_->context();
+  const std::size_t m = m_, n = fluid_->size();
+  FF_TRY(s_pos_, DeviceBuffer::create(c, m * 16));
+  FF_TRY(s_normal_, DeviceBuffer::create(c, m * 16));
+  FF_TRY(s_rho_c_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(s_phi_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(s_target_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(s_fill_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(s_bond_r2_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(s_coef_, DeviceBuffer::create(c, m * 4));
+  FF_TRY(f_target_, DeviceBuffer::create(c, n * 4));
+  FF_TRY(nearest_, DeviceBuffer::create(c, n * 4));
+  FF_TRY(s_vel_, DeviceBuffer::create(c, m * 16));
+  FF_TRY(t_moving_, DeviceBuffer::create(c, samples_.targets() * 4));
+  FF_TRY(t_strength_, DeviceBuffer::create(c, samples_.targets() * 4));
+  const std::vector<float> full(samples_.targets(), 1.0f);  // a timed scene's are copied in every sub-step
+  FF_CHECK(t_strength_.upload(full.data(), full.size() * 4));
+  const std::vector<float> still(4 * m, 0.0f);
+  FF_CHECK(s_vel_.upload(still.data(), still.size() * 4));
+  const std::vector<float> pos = packed(samples_.position), nrm = packed(samples_.normal);
+  const std::vector<std::uint32_t> target(samples_.target.begin(), samples_.target.end());
+  FF_CHECK(s_pos_.upload(pos.data(), pos.size() * 4));
+  FF_CHECK(s_normal_.upload(nrm.data(), nrm.size() * 4));
+  FF_CHECK(s_rho_c_.upload(samples_.rho_c.data(), m * 4));
+  FF_CHECK(s_phi_.upload(samples_.phi.data(), m * 4));
+  FF_CHECK(s_target_.upload(target.data(), m * 4));
+  const std::vector<std::uint32_t> zero(n, 0);
+  FF_CHECK(f_target_.upload(zero.data(), n * 4));
+  FF_CHECK(upload_moving());
+  FF_TRY(s_grid_, fluid_->sort_into_grid(s_pos_, m));
+  return {};
+}
+
+// Per target, 1 when it moves (keyframes, a skin, a live pose): ctl_accel's follow applies to its fluid only.
+Status AdaptiveDevice::upload_moving() {
+  std::vector<std::uint32_t> moving(samples_.targets());
+  for (std::size_t t = 0; t < moving.size(); ++t) moving[t] = samples_.moving(static_cast<std::uint8_t>(t)) ? 1u : 0u;
+  return t_moving_.upload(moving.data(), moving.size() * 4);
 }
 
 // The seed field over the domain at the CPU field's cells, the samples sorted into them, and the flood's jumps.
@@ -152,13 +165,21 @@ Status AdaptiveDevice::make_seed_field(std::size_t targets) {
   FF_TRY(seed_b_, DeviceBuffer::create(c, cells * 4));
   FF_TRY(s_field_, fluid_->sort_into_grid(s_pos_, m_, &field_));
   FF_TRY(seed_init_k_, Kernel::create(c, "ctl_seed_init", shaders::ctl_seed_init(),
-                                      {&s_pos_, &s_target_, &s_fill_, &s_field_.start, &s_field_.items, &seed_a_}));
+                                      {&s_pos_, &s_target_, &s_fill_, &s_field_.start, &s_field_.items, &seed_a_,
+                                       &t_strength_}));
   FF_TRY(flood_ab_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_a_, &seed_b_}));
   FF_TRY(flood_ba_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_b_, &seed_a_}));
   FF_TRY(gather_k_, Kernel::create(c, "ctl_gather", shaders::ctl_gather(),
                                    {&fluid_->x_buffer(), &f_target_, &nearest_, &s_pos_, &seed_a_, &fluid_->velocity_buffer(),
-                                    &fluid_->acceleration_buffer(), &s_vel_}));
+                                    &fluid_->acceleration_buffer(), &s_vel_, &t_strength_}));
   return {};
+}
+
+Status AdaptiveDevice::set_target_pose(std::size_t t, const pose::Pose& pose) {
+  if (t >= samples_.targets()) return {};
+  samples_.set_target_pose(t, pose);
+  moving_ = true;
+  return upload_moving();
 }
 
 Status AdaptiveDevice::set_fluid_targets(std::span<const std::uint8_t> target) {
@@ -227,10 +248,26 @@ AdaptiveDevice::Constants AdaptiveDevice::accel_constants(float dt) const {
   return k;
 }
 
+// The frame's strengths of a timed scene, every sub-step's, into step_strength_ (record_begin copies one in).
+Status AdaptiveDevice::prepare_strengths(double time, float dt, std::size_t steps) {
+  const std::size_t targets = samples_.targets();
+  if (steps > strength_steps_) {
+    FF_TRY(step_strength_, DeviceBuffer::create(fluid_->context(), steps * targets * 4));
+    strength_steps_ = steps;
+  }
+  std::vector<float> strength(steps * targets);
+  for (std::size_t s = 0; s < steps; ++s)  // at the sub-step's start time, as the CPU controller's update_strengths
+    for (std::size_t t = 0; t < targets; ++t)
+      strength[s * targets + t] = samples_.strength(static_cast<std::uint8_t>(t), time + double(s) * double(dt));
+  return step_strength_.upload(strength.data(), strength.size() * 4);
+}
+
 // The frame's poses of moving targets, every sub-step's, into pose_pos_ and pose_vel_ (record_begin copies one in).
 Status AdaptiveDevice::prepare_frame(double time, float dt, int substeps) {
-  if (!moving_ || substeps <= 0) return {};
+  if (substeps <= 0) return {};
   const auto steps = static_cast<std::size_t>(substeps);
+  if (timed_) FF_CHECK(prepare_strengths(time, dt, steps));
+  if (!moving_) return {};
   Context& c = fluid_->context();
   if (steps > pose_steps_) {
     FF_TRY(pose_pos_, DeviceBuffer::create(c, steps * m_ * 16));
@@ -285,6 +322,12 @@ void AdaptiveDevice::record_seed_field(VkCommandBuffer cb, float dt) const {
 }
 
 void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt, int substep) const {
+  if (timed_ && static_cast<std::size_t>(substep) < strength_steps_) {
+    const VkDeviceSize bytes = samples_.targets() * 4;
+    const VkBufferCopy slice{static_cast<VkDeviceSize>(substep) * bytes, 0, bytes};
+    vkCmdCopyBuffer(cb, step_strength_.handle(), t_strength_.handle(), 1, &slice);
+    compute_barrier(cb);
+  }
   if (moving_ && static_cast<std::size_t>(substep) < pose_steps_) {
     // This sub-step's pose into the samples' buffers, then the samples into their grids again.
     const VkBufferCopy slice{static_cast<VkDeviceSize>(substep) * m_ * 16, 0, m_ * 16};

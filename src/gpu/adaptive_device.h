@@ -18,8 +18,12 @@
 // controller uses, every sub-step of a frame at once before the frame is recorded (prepare_frame); each sub-step
 // copies its pose into the samples' buffers and sorts them into their grids again on the device.
 //
-// So far (the rest is issue 45's): targets that act from the start at full strength and do not morph, without
-// kinematic corrections. create() says which of these a scene asks for.
+// Strength tracks and late starts (control/strength.h, ControlTarget::start): each target's strength at every sub-step
+// of a frame is computed on the host by the same ControlSamples::strength (0 before the start) and copied in with the
+// pose; every part of the control scales with it, and at 0 a target has no bonds, seeds or corrections (as the CPU's).
+//
+// So far (the rest is issue 45's): targets that do not morph, without kinematic corrections. create() says which of
+// these a scene asks for.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/control_samples.h"
@@ -27,6 +31,7 @@
 #include "core/error.h"
 #include "gpu/kernel.h"
 #include "gpu/pbf_device.h"
+#include "pose/target_motion.h"
 
 #include <cstdint>
 #include <memory>
@@ -54,6 +59,9 @@ class AdaptiveDevice final : public DeviceController {
   /// `field()`, its seed as an index into the targets' concatenated sets, or kInvalidIndex.
   Status get_seeds(std::vector<Index>& seeds) const;
   const GridSpec& field() const { return field_; }
+  /// Live steering (control/steering.h): target `t` holds `pose` from the next frame on; a static target starts
+  /// moving (its poses are uploaded every frame from then on). An index past the last target is ignored.
+  Status set_target_pose(std::size_t t, const pose::Pose& pose);
 
   Status prepare_frame(double time, float dt, int substeps) override;
   void record_begin(VkCommandBuffer cb, float dt, int substep) const override;
@@ -66,11 +74,18 @@ class AdaptiveDevice final : public DeviceController {
   AdaptiveDevice() = default;
   Constants constants(float dt) const;
   Constants accel_constants(float dt) const;
+  Status prepare_strengths(double time, float dt, std::size_t steps);
+  Status make_buffers();
+  Status upload_moving();
 
   PbfDevice* fluid_ = nullptr;
   control::ControlSamples samples_;  // posed on the host, as the CPU controller poses its own
   bool moving_ = false;              // some target moves: poses are uploaded every frame
   DeviceBuffer s_vel_, t_moving_;    // u_c per sample (0 when static); per target 1 when it moves
+  bool timed_ = false;               // some target starts late or has a strength track: strengths every sub-step
+  DeviceBuffer t_strength_;          // per target, its strength in this sub-step (1 throughout when not timed_)
+  DeviceBuffer step_strength_;       // the frame's sub-steps' strengths, targets after targets
+  std::size_t strength_steps_ = 0;   // sub-steps step_strength_ has room for
   DeviceBuffer pose_pos_, pose_vel_, pose_nrm_;  // the frame's sub-steps' poses, one after the other
   std::size_t pose_steps_ = 0;       // sub-steps pose_pos_ has room for
   control::AdaptiveParams params_;

@@ -1,5 +1,6 @@
 #include "pipeline/stepper.h"
 
+#include "control/steering.h"
 #include "gpu/adaptive_device.h"
 #include "gpu/context.h"
 #include "gpu/pbf_device.h"
@@ -27,6 +28,10 @@ class CpuStepper final : public FrameStepper {
   }
   std::string device() const override { return "cpu"; }
   std::string_view controller() const override { return controller_->name(); }
+  Status set_target_pose(std::size_t t, const pose::Pose& pose) override {
+    if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
+    return {};
+  }
 
  private:
   sim::PbfSolver solver_;
@@ -57,6 +62,9 @@ class GpuStepper final : public FrameStepper {
   }
   std::string device() const override { return name_; }
   std::string_view controller() const override { return control_ ? "adaptive" : "none"; }
+  Status set_target_pose(std::size_t t, const pose::Pose& pose) override {
+    return control_ ? control_->set_target_pose(t, pose) : Status{};
+  }
 
   static Result<std::unique_ptr<GpuStepper>> create(int device_index, const sim::SolverParams& sp, const sim::Domain& dom,
                                                    const control::ControllerSpec& spec,
@@ -89,9 +97,8 @@ class GpuStepper final : public FrameStepper {
 };
 
 // What of the scene the GPU path does not do yet ("" when it does all of it).
-std::string gpu_gap(const sim::SolverParams& sp, const control::ControllerSpec& spec) {
+std::string gpu_gap(const control::ControllerSpec& spec) {
   if (spec.name != "adaptive" && spec.name != "none") return fmt::format("the controller '{}'", spec.name);
-  if (sp.vorticity > 0.0f) return "vorticity confinement (solver.vorticity > 0)";
   return {};
 }
 
@@ -108,15 +115,12 @@ Result<int> pick_gpu(bool any) {
 
 }  // namespace
 
-Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec,
-                    std::span<const scene::TargetSpec> targets) {
+Status check_device(Device device, const control::ControllerSpec& spec, std::span<const scene::TargetSpec> targets) {
   if (device != Device::Gpu) return {};
-  std::string gap = gpu_gap(solver, spec);
+  std::string gap = gpu_gap(spec);
   for (std::size_t t = 0; t < targets.size() && gap.empty() && spec.name == "adaptive"; ++t) {
     if (spec.get<control::AdaptiveParams>().kinematic) gap = "kinematic corrections (controller.adaptive.kinematic)";
     else if (!targets[t].swaps.empty()) gap = fmt::format("a morphing target (targets[{}].morph)", t);
-    else if (!targets[t].strength.empty()) gap = fmt::format("a strength track (targets[{}].strength)", t);
-    else if (targets[t].start > 0.0f) gap = fmt::format("a target that starts later (targets[{}].start)", t);
   }
   if (!gap.empty()) return param_error("--device gpu: the GPU path does not do " + gap + " yet; use --device cpu");
   return {};
@@ -127,10 +131,10 @@ Result<std::unique_ptr<FrameStepper>> make_stepper(Device device, const sim::Sol
                                                    std::vector<control::ControlTarget> targets,
                                                    const control::ControlContext& ctx, const sim::ParticleSet& p) {
   if (device != Device::Cpu) {
-    const std::string gap = gpu_gap(sp, spec);
+    const std::string gap = gpu_gap(spec);
     auto index = pick_gpu(device == Device::Gpu);
     if (device == Device::Gpu) {
-      FF_CHECK(check_device(device, sp, spec));
+      FF_CHECK(check_device(device, spec));
       if (!index) return index.error();
       if (*index < 0) return io_error("--device gpu: no Vulkan device with a compute queue");
       FF_TRY(auto s, GpuStepper::create(*index, sp, dom, spec, std::move(targets), ctx, p));

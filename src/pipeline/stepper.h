@@ -6,6 +6,7 @@
 #include "control/control_targets.h"
 #include "control/registry.h"
 #include "core/error.h"
+#include "pose/target_motion.h"
 #include "scene/scene.h"
 #include "sim/controller.h"
 #include "sim/particle_set.h"
@@ -24,8 +25,8 @@ enum class Device { Cpu, Gpu, Auto };
 Result<Device> parse_device(std::string_view name, std::string_view option = "--device");
 
 /// For --device gpu: an Error naming what of the scene the GPU path does not do yet (checked before the run starts
-/// anything); ok for the CPU and auto. `targets`: the scene's (their morphs, strength tracks and start times).
-Status check_device(Device device, const sim::SolverParams& solver, const control::ControllerSpec& spec,
+/// anything); ok for the CPU and auto. `targets`: the scene's (their morphs).
+Status check_device(Device device, const control::ControllerSpec& spec,
                     std::span<const scene::TargetSpec> targets = {});
 
 class FrameStepper {
@@ -37,6 +38,9 @@ class FrameStepper {
   /// What ran: "cpu", or the GPU's name and driver.
   virtual std::string device() const = 0;
   virtual std::string_view controller() const = 0;
+  /// Live steering (control/steering.h): target `t` holds `pose` from the next frame on. A controller without
+  /// targets ignores it.
+  virtual Status set_target_pose(std::size_t t, const pose::Pose& pose) = 0;
 };
 
 /// The stepper for `device`. `spec.name` "none" runs plain PBF. GPU: the first discrete or integrated GPU, else any

@@ -75,10 +75,15 @@ TEST(GpuRun, FormsAsTheCpuDoesRepeatsBitForBitAndResumes) {
 
 TEST(GpuRun, WhatTheGpuDoesNotDoYetIsAOneLineErrorAndAutoFallsBack) {
   const auto dir = test::temp_dir("gpu_gaps");
-  const fs::path scene = forming_scene(dir, R"("vorticity": 0.5)");  // not on the device yet
+  test::write_obj(dir / "sphere.obj", test::sphere_mesh(0.25f, 3));
+  const fs::path scene = write_scene(dir, R"({
+    "targets": [{"mesh": "sphere.obj"}],
+    "sampling": {"auto_count": 1500},
+    "controller": {"adaptive": {"kinematic": true}}
+  })");  // not on the device yet
   const auto r = run({"-q", "run", scene.string(), "-o", (dir / "out").string(), "--device", "gpu", "--frames", "2"});
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("does not do vorticity"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not do kinematic corrections"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out")) << "checked before anything is written";
   const auto bad = run({"run", scene.string(), "-o", (dir / "bad").string(), "--device", "tpu"});

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 namespace ff::gpu {
 namespace {
@@ -23,7 +24,7 @@ struct Scene {
   control::AdaptiveParams params;
   control::ControlContext ctx;
   Scene() {
-    c.sp.surface_tension = 0.0f, c.sp.vorticity = 0.0f;  // not on the device yet
+    c.sp.surface_tension = 0.0f, c.sp.vorticity = 0.0f;  // the controller's passes alone (tested apart)
     c.sp.max_iterations = c.sp.iterations;                                    // a fixed sweep count on both
     params.gather = false;                                                    // not on the device yet
   }
@@ -250,6 +251,100 @@ TEST(GpuAdaptive, AMovingTargetTracksTheCpuController) {
   EXPECT_LT(dx[dx.size() / 2], 1e-3);
   EXPECT_LT(dx[dx.size() * 9 / 10], 1e-2);
   EXPECT_GE(same, gx.size() - gx.size() / 50);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
+// Strength tracks and late starts (control/strength.h): from a state formed on the CPU, one frame with the target
+// softened by a track that falls inside the frame, one with a start inside the frame, and one with a start after it,
+// each from a fresh controller on both paths, with the gather steering. Both paths see the same strengths per sub-step.
+struct TimedFrame {
+  std::vector<Vec3f> x;      // by particle id
+  std::vector<Index> bound;  // by particle id
+};
+
+TEST(GpuAdaptive, AStrengthTrackAndALateStartTrackTheCpuController) {
+  Scene s;
+  s.params.gather = true;
+  sim::ParticleSet p;
+  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
+  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
+  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  {
+    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+    ASSERT_TRUE(formed.has_value()) << formed.error().message;
+    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
+  }
+  const sim::ParticleSet start = p;
+  const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  const GridSpec grid = GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value();
+  // One frame from `start` on each path with `targets` (no targets: the device frame without a controller).
+  auto cpu_frame = [&](const std::vector<control::ControlTarget>& targets) {
+    sim::ParticleSet q = start;
+    auto ctl = control::AdaptiveController::create(targets, s.ctx, s.params);
+    EXPECT_TRUE(ctl.has_value() && solver.advance(q, t0, frame, **ctl).has_value());
+    TimedFrame out{by_id(q, q.position), std::vector<Index>(q.size())};
+    for (std::size_t i = 0; i < q.size(); ++i) out.bound[q.id[i]] = q.bound_control[i];
+    return out;
+  };
+  auto gpu_frame = [&](const std::vector<control::ControlTarget>& targets) {
+    auto dev = PbfDevice::create(**ctx, start.size(), grid).value();
+    EXPECT_TRUE(dev->set_state(start.position, start.velocity).ok() && dev->set_ids(start.id).ok());
+    std::unique_ptr<AdaptiveDevice> ctl;
+    if (!targets.empty()) {
+      ctl = AdaptiveDevice::create(*dev, targets, s.ctx, s.params).value();
+      EXPECT_TRUE(ctl->set_fluid_targets(start.target).ok());
+      dev->set_controller(ctl.get());
+    }
+    EXPECT_TRUE(dev->advance(solver, t0, frame).has_value());
+    std::vector<Vec3f> x, v;
+    EXPECT_TRUE(dev->get_state(x, v).ok());
+    TimedFrame out{by_id(start, x), std::vector<Index>(start.size(), kInvalidIndex)};
+    std::vector<Index> bound;
+    if (ctl && ctl->get_bound(bound).ok())
+      for (std::size_t i = 0; i < bound.size(); ++i) out.bound[start.id[i]] = bound[i];
+    return out;
+  };
+  auto median_apart = [&](const TimedFrame& a, const TimedFrame& b, double* largest = nullptr) {
+    std::vector<double> d(a.x.size());
+    for (std::size_t i = 0; i < d.size(); ++i) d[i] = (a.x[i] - b.x[i]).norm() / s.c.sp.spacing();
+    std::sort(d.begin(), d.end());
+    if (largest) *largest = d.back();
+    return d[d.size() / 2];
+  };
+  auto timed = [&](double start_time, std::vector<control::StrengthKey> keys) {
+    auto t = s.targets();
+    t[0].start = start_time;
+    t[0].strength.keys = std::move(keys);
+    return t;
+  };
+  const TimedFrame held = cpu_frame(s.targets()), free_gpu = gpu_frame({});
+  // Softened from 1 to 0.2 over the frame, and a start a third into it.
+  for (const auto& targets : {timed(0.0, {{t0, 1.0f}, {t0 + frame, 0.2f}}), timed(t0 + frame / 3, {})}) {
+    const TimedFrame c = cpu_frame(targets), g = gpu_frame(targets);
+    double largest = 0;
+    const double apart = median_apart(g, c, &largest), changed = median_apart(c, held);
+    std::size_t same = 0, controlled = 0;
+    for (std::size_t i = 0; i < c.bound.size(); ++i) same += g.bound[i] == c.bound[i], controlled += c.bound[i] != kInvalidIndex;
+    std::printf("start %.4f s, %zu keys: %zu of %zu controlled; GPU − CPU |Δx|/d median %.2e, largest %.2e; the timing "
+                "moved the CPU's frame by %.2e (median); same nearest sample %zu\n",
+                targets[0].start, targets[0].strength.keys.size(), controlled, c.bound.size(), apart, largest, changed,
+                same);
+    EXPECT_GT(controlled, c.bound.size() / 2);
+    EXPECT_LT(apart, 1e-3);
+    EXPECT_GT(changed, 10 * apart);  // the strengths changed the frame far more than the two paths differ
+    EXPECT_GE(same, c.bound.size() - c.bound.size() / 50);
+  }
+  // A target that starts after the frame adds exactly nothing: the frame without a controller, bit for bit.
+  const TimedFrame later = gpu_frame(timed(t0 + 2 * frame, {}));
+  double largest = -1;
+  median_apart(later, free_gpu, &largest);
+  EXPECT_EQ(largest, 0.0);
+  EXPECT_EQ(std::count(later.bound.begin(), later.bound.end(), kInvalidIndex), std::ptrdiff_t(later.bound.size()));
+  EXPECT_GT(median_apart(free_gpu, held), 1e-2);
   for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 

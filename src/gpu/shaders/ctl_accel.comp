@@ -14,6 +14,7 @@ layout(std430, binding = 3) buffer Accel { vec4 accel[]; };
 layout(std430, binding = 4) readonly buffer FTarget { uint f_target[]; };
 layout(std430, binding = 5) readonly buffer SVel { vec4 s_vel[]; };
 layout(std430, binding = 6) readonly buffer TMoving { uint t_moving[]; };  // per target: 1 when it moves
+layout(std430, binding = 7) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -22,26 +23,27 @@ void main() {
   if (i == 0xFFFFFFFFu) return;
   vec3 a = accel[j].xyz;
   const float thr = C.c2.y, vmax = C.c2.z, dt = C.c2.w;
+  const float s = t_strength[f_target[j]];  // every part scales with the target's strength (1: as written)
   if (thr >= 0.0) {  // < 0: no boundary correction
     const vec3 nrm = s_normal[i].xyz;
     const float len = length(nrm);
     if (len >= thr && len != 0.0) {
       const vec3 nh = nrm / len;
       const float outward = dot(nh, a);
-      if (outward > 0.0) a -= outward * nh;
+      if (outward > 0.0) a -= s * outward * nh;
     }
   }
   const float k = C.c0.x;
   if (k > 0.0 && t_moving[f_target[j]] != 0u) {  // a static target's fluid (u_c = 0) is not damped
     const vec3 u = s_vel[i].xyz;
-    a += (k / dt) * (u - (vel[j].xyz + dt * a));
+    a += (s * k / dt) * (u - (vel[j].xyz + dt * a));
     const vec3 vs = vel[j].xyz + dt * a - u;
     const float s2 = dot(vs, vs);
-    if (s2 > vmax * vmax) a += (vs * (vmax / sqrt(s2)) - vs) / dt;
+    if (s2 > vmax * vmax) a += s * (vs * (vmax / sqrt(s2)) - vs) / dt;
   } else {
     const vec3 vs = vel[j].xyz + dt * a;
     const float s2 = dot(vs, vs);
-    if (s2 > vmax * vmax) a += (vs * (vmax / sqrt(s2)) - vs) / dt;
+    if (s2 > vmax * vmax) a += s * (vs * (vmax / sqrt(s2)) - vs) / dt;
   }
   accel[j] = vec4(a, 0.0);
 }

@@ -14,12 +14,18 @@ layout(std430, binding = 6) readonly buffer FItems { uint f_items[]; };
 layout(std430, binding = 7) readonly buffer FTarget { uint f_target[]; };
 layout(std430, binding = 8) writeonly buffer SFill { float s_fill[]; };
 layout(std430, binding = 9) writeonly buffer SBond { float s_bond_r2[]; };
+layout(std430, binding = 10) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= uint(C.c3.x)) return;
   const float hc2 = C.c0.y;
   const uint t = s_target[i];
+  if (t_strength[t] <= 0.0) {  // a target not acting (not started, or released): fill 0, no bonds (−1 < any r²)
+    s_fill[i] = 0.0;
+    s_bond_r2[i] = -1.0;
+    return;
+  }
   const vec3 xc = s_pos[i].xyz;
   const ivec3 ci = cell_of_index(s_cell[i]);
   float sw = 0.0;

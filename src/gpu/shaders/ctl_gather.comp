@@ -15,6 +15,7 @@ layout(std430, binding = 4) readonly buffer Seed { uint seed[]; };
 layout(std430, binding = 5) readonly buffer Vel { vec4 vel[]; };
 layout(std430, binding = 6) buffer Accel { vec4 accel[]; };
 layout(std430, binding = 7) readonly buffer SVel { vec4 s_vel[]; };
+layout(std430, binding = 8) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -34,5 +35,5 @@ void main() {
   } else {
     v_des = (C.c0.w / len) * to;
   }
-  accel[j] += vec4(-C.c0.xyz + C.c1.x * (v_des - vel[j].xyz), 0.0);
+  accel[j] += vec4(t_strength[t] * (-C.c0.xyz + C.c1.x * (v_des - vel[j].xyz)), 0.0);
 }

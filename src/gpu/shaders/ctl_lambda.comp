@@ -18,6 +18,7 @@ layout(std430, binding = 8) readonly buffer FItems { uint f_items[]; };
 layout(std430, binding = 9) readonly buffer FTarget { uint f_target[]; };
 layout(std430, binding = 10) writeonly buffer SCoef { float s_coef[]; };
 layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
+layout(std430, binding = 12) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
@@ -25,6 +26,10 @@ void main() {
   const float hc = C.c0.x, hc2 = C.c0.y, poly6_k = C.c0.z, kgrad = C.c0.w;
   const float mp = C.c1.x, eps = C.c1.y;
   const uint t = s_target[i];
+  if (t_strength[t] <= 0.0) {  // a target not acting: no correction (nor are its samples bonded)
+    s_coef[i] = 0.0;
+    return;
+  }
   const vec3 xc = s_pos[i].xyz;
   const vec3 xe = xc + C.c2.w * s_vel[i].xyz;  // the sample at the end of the sub-step, as x*
   const ivec3 ci = cell_of_index(s_cell[i]);
@@ -51,7 +56,7 @@ void main() {
   if (cst < 0.0) {
     const float kk = mp / rho_c * kgrad;
     const float lambda = -cst / (kk * kk * g2 + eps);
-    coef = s_phi[i] * lambda * mp / rho_c * (-kgrad);
+    coef = t_strength[t] * s_phi[i] * lambda * mp / rho_c * (-kgrad);
   }
   s_coef[i] = coef;
 }

@@ -11,12 +11,17 @@ layout(std430, binding = 2) readonly buffer SFill { float s_fill[]; };
 layout(std430, binding = 3) readonly buffer FieldStart { uint field_start[]; };  // the samples in the field's cells
 layout(std430, binding = 4) readonly buffer FieldItems { uint field_items[]; };
 layout(std430, binding = 5) writeonly buffer Seed { uint seed[]; };                 // targets × cells
+layout(std430, binding = 6) readonly buffer TStrength { float t_strength[]; };     // per target, in this sub-step
 
 void main() {
   const uint cells = field_cells();
   const uint g = gl_GlobalInvocationID.x;
   if (g >= cells * uint(C.field_dims.w)) return;
   const uint t = g / cells, c = g % cells;
+  if (!(t_strength[t] > 0.0)) {  // a target not acting (not started, or released) has no seeds, as it has no bonds
+    seed[g] = 0xFFFFFFFFu;
+    return;
+  }
   const vec3 centre = field_centre(field_cell(c));
   float best = 1.0 / 0.0;
   uint best_s = 0xFFFFFFFFu;

@@ -17,6 +17,7 @@ layout(std430, binding = 8) readonly buffer SBond { float s_bond_r2[]; };
 layout(std430, binding = 9) readonly buffer SFill { float s_fill[]; };
 layout(std430, binding = 10) buffer Pos { vec4 pos[]; };
 layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
+layout(std430, binding = 12) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -43,5 +44,5 @@ void main() {
       den += w;
     }
   END_FOR_CELLS
-  if (den > 0.0) pos[j] = vec4(xs + (C.c2.x / den) * num, 0.0);
+  if (den > 0.0) pos[j] = vec4(xs + (C.c2.x * t_strength[t] / den) * num, 0.0);
 }
