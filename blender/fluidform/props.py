@@ -12,6 +12,15 @@ CONTROLLERS = [
     ("none", "None", "No control: the fluid only falls"),
 ]
 
+# `fluidform run --device` (docs/gpu.md): the GPU path runs the adaptive controller (or none) in Vulkan compute.
+DEVICES = [
+    ("cpu", "CPU", "Simulate on the CPU (the reference path; default)"),
+    ("auto", "Auto", "A discrete or integrated GPU when there is one and the scene is one the GPU path does, "
+                     "else the CPU"),
+    ("gpu", "GPU", "Vulkan compute on the GPU (a software device where there is none); a scene the GPU path "
+                   "does not do is an error"),
+]
+
 
 class FluidFormSettings(bpy.types.PropertyGroup):
     particle_count: IntProperty(
@@ -19,6 +28,8 @@ class FluidFormSettings(bpy.types.PropertyGroup):
         description="About how many fluid particles (and as many control particles in the targets)")
     controller: EnumProperty(name="Controller", items=CONTROLLERS, default="adaptive",
                              description="The shape controller that holds the fluid in the targets")
+    device: EnumProperty(name="Device", items=DEVICES, default="cpu",
+                         description="Where the fluid is simulated (fluidform run --device)")
     duration: FloatProperty(
         name="Duration", default=0.0, min=0.0, max=100_000.0, soft_max=60.0, unit="TIME_ABSOLUTE", step=10,
         description="Seconds to simulate; 0 runs until the shape has formed and held (for moving targets: "

@@ -97,7 +97,7 @@ class FormTask:
             self.scene_path = os.path.join(self.input_dir, "scene.json")
             targets.write_scene(self.scene_path, tlist, settings.particle_count, self.fps)
             argv = [cli_path(context), "run", self.scene_path, "--out", self.out_dir,
-                    "--controller", settings.controller]
+                    "--controller", settings.controller, "--device", settings.device]
             if self.frames:
                 argv += ["--frames", str(self.frames)]
             self.argv = argv

@@ -43,6 +43,7 @@ class FLUIDFORM_PT_panel(bpy.types.Panel):
         col.enabled = running is None
         col.prop(settings, "particle_count")
         col.prop(settings, "controller")
+        col.prop(settings, "device")
         col.prop(settings, "duration")
         row = col.row()
         row.alignment = "RIGHT"

@@ -53,6 +53,11 @@ Command add_serve(CLI::App& app) {
                   "simulate as fast as the machine can (default: at most real time)");
   serve->add_option("--max-fps", o->serve.max_fps,
                     "at most this many simulated frames per second of wall time (default 0: no cap)");
+  serve->add_option("--device", o->serve.device,
+                    "cpu, gpu (Vulkan; lavapipe where there is no GPU) or auto (a GPU when there is one and the scene is "
+                    "one the GPU path does, else the CPU); docs/gpu.md")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
+      ->capture_default_str();
   serve->add_option("--max-memory", o->max_memory,
                     "MiB the live scene may need, estimated before it starts (overrides limits.max_memory_mb)")
       ->check(CLI::Range(1.0, 1e9));

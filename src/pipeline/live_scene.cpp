@@ -25,6 +25,8 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   if (options.controller) s->scene_.controller.name = *options.controller;
   FF_CHECK(s->scene_.controller.validate());
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
+  FF_TRY(s->device_, parse_device(options.device));
+  FF_CHECK(check_device(s->device_, s->scene_.controller, s->scene_.targets));
   FF_TRY(s->geometry_, load_target_meshes(s->scene_));
   // A live preview keeps sampling.auto_count (10k: display rate on two cores) where `run` would raise it for thin
   // walls (~40k for the bunny, ~3 frames a second): the thin-wall line still says what would resolve them.
@@ -75,17 +77,29 @@ Status LiveScene::rebuild_controller() {
   // The controller gets the targets as they are now: swapped meshes, steered poses (TargetMotion::live).
   std::vector<control::ControlTarget> targets = controls_;
   for (std::size_t t = 0; t < targets.size(); ++t) targets[t].motion = motions_[t];
+  if (device_ != Device::Cpu) {
+    FF_TRY(auto s, make_stepper(device_, scene_.solver, scene_.domain, scene_.controller, targets, ctx_, particles_));
+    if (s->device() != "cpu") {
+      gpu_ = std::move(s);
+      controller_.reset();
+      return {};
+    }
+    gpu_.reset();  // auto, and no GPU (or a scene it does not do): said once by make_stepper, then the CPU as always
+  }
   FF_TRY(auto c, control::make_controller(scene_.controller, std::move(targets), ctx_));
   controller_ = std::move(c);
   return {};
 }
 
-std::string LiveScene::controller_name() const { return std::string(controller_->name()); }
+std::string LiveScene::controller_name() const {
+  return std::string(gpu_ ? gpu_->controller() : controller_->name());
+}
 
 Result<LiveFrame> LiveScene::step(bool measure) {
   const double frame_dt = 1.0 / scene_.output.fps;
   core::Stopwatch watch;
-  FF_TRY(auto stats, solver_->advance(particles_, time_, frame_dt, *controller_));
+  FF_TRY(auto stats, gpu_ ? gpu_->advance(particles_, time_, frame_dt)
+                          : solver_->advance(particles_, time_, frame_dt, *controller_));
   LiveFrame f;
   f.step_seconds = watch.seconds();
   ++frame_;
@@ -137,7 +151,8 @@ Result<LivePose> LiveScene::set_pose(std::size_t t, const LivePose& in) {
   p.translate = p.translate.cwiseMax(lo).cwiseMin(hi);
   const pose::Pose pose = pose::make_pose(p.translate, p.rotate_deg, p.scale);
   motions_[t].live = pose;
-  if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
+  if (gpu_) FF_CHECK(gpu_->set_target_pose(t, pose));
+  else if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
   targets_[t].pose = p;
   return p;
 }

@@ -5,6 +5,7 @@
 // restarted. Not thread-safe: one thread (the server's simulation thread) owns it.
 #include "pipeline/auto_scene.h"
 #include "pipeline/scene_setup.h"
+#include "pipeline/stepper.h"
 #include "control/registry.h"
 #include "pose/target_motion.h"
 #include "core/error.h"
@@ -28,6 +29,7 @@ struct LiveOptions {
   std::optional<std::string> controller;                    ///< overrides scene.controller.name
   std::vector<std::filesystem::path> extra_meshes;          ///< more meshes for the swap list (sampled when chosen)
   std::optional<double> max_memory_mib;                     ///< --max-memory: overrides scene.limits.max_memory_mb
+  std::string device = "cpu";  ///< --device cpu|gpu|auto (pipeline/stepper.h): where the frames are simulated
 };
 
 /// What one step reports (the viewer's HUD).
@@ -96,6 +98,8 @@ class LiveScene {
   /// The scene's meshes: every target's and every mesh swap's, once each, then LiveOptions::extra_meshes.
   const std::vector<std::filesystem::path>& meshes() const { return meshes_; }
   std::string controller_name() const;
+  /// What simulates: "cpu", or the GPU's name and driver (--device).
+  std::string device() const { return gpu_ ? gpu_->device() : "cpu"; }
   const scene::Scene& scene() const { return scene_; }
   double time() const { return time_; }
   int frame() const { return frame_; }
@@ -117,6 +121,10 @@ class LiveScene {
   std::unique_ptr<sim::PbfSolver> solver_;
   control::ControlContext ctx_;
   std::unique_ptr<sim::Controller> controller_;
+  // --device gpu, or auto where it found a GPU: the frames are stepped on the device instead, by a stepper made
+  // afresh (from the particles where they are) whenever the controller is (controller_ then stays empty).
+  Device device_ = Device::Cpu;
+  std::unique_ptr<FrameStepper> gpu_;
   std::vector<std::uint8_t> scratch_;
   double time_ = 0.0;
   int frame_ = 0;

@@ -144,6 +144,7 @@ json live_hello(const pipeline::LiveScene& s, bool paused, bool surface) {
           {"particles", s.particles().size()},
           {"controller", s.controller_name()},
           {"controllers", controllers},
+          {"device", s.device()},
           {"meshes", meshes},
           {"targets", targets},
           {"domain", {{"min", vec(d.min)}, {"max", vec(d.max)}}},
@@ -372,8 +373,10 @@ Status open_input(const ServeOptions& opt, core::Progress& progress, Shared& sh,
     lo.controller = opt.controller;
     lo.extra_meshes = opt.meshes;
     lo.max_memory_mib = opt.max_memory_mib;
+    lo.device = opt.device;
     FF_TRY(live, pipeline::LiveScene::create(scene, lo, progress));
-    spdlog::info("serve: {} particles, controller {}", live->particles().size(), live->controller_name());
+    spdlog::info("serve: {} particles, controller {}, on {}", live->particles().size(), live->controller_name(),
+                 live->device());
     sh.set_hello(live_hello(*live, false, false));
   }
   return {};

@@ -26,6 +26,7 @@ struct ServeOptions {
                                  ///< or make the simulation slower than the display on purpose (the viewer's tests)
   double exit_after = 0.0;       ///< s of wall time, then a clean exit (0: until Ctrl-C); for scripts and tests
   std::optional<double> max_memory_mib;  ///< --max-memory: overrides the scene's limits.max_memory_mb (live mode)
+  std::string device = "cpu";    ///< --device cpu|gpu|auto (live mode; pipeline/stepper.h)
   Status validate() const;
 };
 

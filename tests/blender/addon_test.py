@@ -230,9 +230,16 @@ def bunny_case():
     bpy.context.view_layer.objects.active = bunny
     s = bpy.context.scene.fluidform
     s.particle_count, s.duration, s.start_frame = 3000, 0.75, 10
+    s.device = "auto"  # the panel's device choice reaches the run: a real GPU when there is one, else the CPU
     coll, secs, new = form("bunny")
     if not check(coll is not None, "bunny: nothing imported"):
         return None
+    import fluidform.task as ft
+    argv = ft.last().argv
+    check(argv[argv.index("--device") + 1] == "auto", f"bunny: the run was started with {argv}")
+    with open(os.path.join(coll["fluidform_output"], "report.json")) as f:
+        report["bunny_device"] = json.load(f).get("device")
+    check(bool(report["bunny_device"]), "bunny: report.json names no device")
     frames = round(0.75 * bpy.context.scene.render.fps)
     res = check_result("bunny", coll, 10, frames, 1)
     res["seconds"] = secs

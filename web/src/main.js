@@ -241,7 +241,9 @@ function onHello(h) {
   // A finished run's report page (report.html in its folder), one click from its playback.
   $('lnk-report').hidden = !h.report;
   if (h.report) $('lnk-report').href = h.report;
-  hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}`);
+  // The device when it is not the CPU (serve --device gpu|auto): "live: adaptive on NVIDIA … (driver)".
+  const on = h.device && h.device !== 'cpu' ? ` on ${h.device}` : '';
+  hud.status(h.mode === 'playback' ? 'playback' : `live: ${h.controller}${on}`);
   $('btn-play').textContent = h.paused ? 'play' : 'pause';
   if (h.radius) {
     particles.setRadius(h.radius);
