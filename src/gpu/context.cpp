@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 
 namespace ff::gpu {
@@ -233,6 +234,33 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
   return c;
 }
 
+VkResult Context::injected_allocation() {
+  ++allocations_;
+  return allocations_ == faults_.oom_at_allocation ? VK_ERROR_OUT_OF_DEVICE_MEMORY : VK_SUCCESS;
+}
+
+VkResult Context::injected_shader(const char* name) const {
+  return !faults_.bad_shader.empty() && faults_.bad_shader == name ? VK_ERROR_INVALID_SHADER_NV : VK_SUCCESS;
+}
+
+Result<FaultPlan> fault_plan_from_env() {
+  const char* env = std::getenv("FF_GPU_FAULT");
+  FaultPlan plan;
+  if (!env || !*env) return plan;
+  const std::string v = env;
+  const auto colon = v.find(':');
+  const std::string kind = v.substr(0, colon), arg = colon == std::string::npos ? "" : v.substr(colon + 1);
+  char* end = nullptr;
+  const long n = std::strtol(arg.c_str(), &end, 10);
+  const bool count = !arg.empty() && end && *end == '\0' && n > 0;
+  if (kind == "device-lost" && count) plan.device_lost_at_submit = n;
+  else if (kind == "out-of-memory" && count) plan.oom_at_allocation = n;
+  else if (kind == "shader" && !arg.empty()) plan.bad_shader = arg;
+  else
+    return param_error(fmt::format("FF_GPU_FAULT = '{}': expected device-lost:N, out-of-memory:N or shader:NAME", v));
+  return plan;
+}
+
 Context::~Context() {
   if (device_) {
     vkDeviceWaitIdle(device_);
@@ -270,7 +298,9 @@ Status Context::end_one_shot(VkCommandBuffer cb) {
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cb;
-    if (const VkResult r = vkQueueSubmit(queue_, 1, &si, fence_); r != VK_SUCCESS) {
+    ++submits_;
+    const bool lost = faults_.device_lost_at_submit > 0 && submits_ >= faults_.device_lost_at_submit;
+    if (const VkResult r = lost ? VK_ERROR_DEVICE_LOST : vkQueueSubmit(queue_, 1, &si, fence_); r != VK_SUCCESS) {
       s = vk_error("vkQueueSubmit", r);
     } else {
       if (const VkResult w = vkWaitForFences(device_, 1, &fence_, VK_TRUE, UINT64_MAX); w != VK_SUCCESS)

@@ -29,6 +29,19 @@ struct DeviceInfo {
 /// The Vulkan devices of this machine; an Error when there is no loader or no instance can be made.
 Result<std::vector<DeviceInfo>> list_devices();
 
+/// Faults injected at the Vulkan calls, to test what the runs do when a real device fails (issue 45): the call
+/// returns the error code a failing driver returns, and everything above it takes its ordinary error path.
+/// `fluidform run --device gpu` reads them from FF_GPU_FAULT (fault_plan_from_env) into its Context (set_faults);
+/// nothing is injected by default.
+struct FaultPlan {
+  long device_lost_at_submit = 0;  ///< the n-th queue submission (from 1) and every later one: VK_ERROR_DEVICE_LOST
+  long oom_at_allocation = 0;      ///< the n-th buffer allocation (from 1): VK_ERROR_OUT_OF_DEVICE_MEMORY
+  std::string bad_shader;          ///< loading this shader (e.g. "pbf_lambda"): VK_ERROR_INVALID_SHADER_NV
+};
+/// FF_GPU_FAULT = "device-lost:N", "out-of-memory:N" or "shader:NAME" (unset or empty: none); anything else is an
+/// error naming the variable.
+Result<FaultPlan> fault_plan_from_env();
+
 struct ContextOptions {
   int device = -1;          ///< index into list_devices(); −1: the first with a compute queue
   bool validation = false;  ///< enable VK_LAYER_KHRONOS_validation and keep its warnings and errors
@@ -59,6 +72,11 @@ class Context {
   /// Records commands into a one-time command buffer, submits it and waits for it.
   template <class Record>
   Status submit_and_wait(Record&& record);
+  /// The injected result (FaultPlan) of the next buffer allocation, and of loading shader `name`: VK_SUCCESS unless
+  /// a fault is planned there.
+  void set_faults(const FaultPlan& faults) { faults_ = faults; }  ///< none until set
+  VkResult injected_allocation();
+  VkResult injected_shader(const char* name) const;
 
  private:
   Context() = default;
@@ -79,6 +97,8 @@ class Context {
   std::uint32_t timestamp_bits_ = 0;
   std::uint32_t max_groups_ = 65535;
   std::vector<std::string> messages_;
+  FaultPlan faults_;
+  long submits_ = 0, allocations_ = 0;
 };
 
 template <class Record>

@@ -71,8 +71,10 @@ Result<DeviceBuffer> DeviceBuffer::create(Context& ctx, VkDeviceSize bytes, bool
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = req.size;
   ai.memoryTypeIndex = static_cast<std::uint32_t>(type);
-  if (const VkResult r = vkAllocateMemory(ctx.device(), &ai, nullptr, &b.memory_); r != VK_SUCCESS)
-    return vk_fail(fmt::format("allocating {:.1f} MB of device memory", static_cast<double>(bytes) / 1e6), r);
+  VkResult alloc = ctx.injected_allocation();  // VK_SUCCESS unless a test plans a fault here (gpu::FaultPlan)
+  if (alloc == VK_SUCCESS) alloc = vkAllocateMemory(ctx.device(), &ai, nullptr, &b.memory_);
+  if (alloc != VK_SUCCESS)
+    return vk_fail(fmt::format("allocating {:.3g} MB of device memory", static_cast<double>(bytes) / 1e6), alloc);
   if (const VkResult r = vkBindBufferMemory(ctx.device(), b.buffer_, b.memory_, 0); r != VK_SUCCESS)
     return vk_fail("vkBindBufferMemory", r);
   if (host_visible)
@@ -150,8 +152,9 @@ Result<Kernel> Kernel::create(Context& ctx, const char* name, std::span<const st
   VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   mi.codeSize = spirv.size_bytes();
   mi.pCode = spirv.data();
-  if (const VkResult r = vkCreateShaderModule(d, &mi, nullptr, &k.module_); r != VK_SUCCESS)
-    return vk_fail(fmt::format("loading shader {}", name), r);
+  VkResult loaded = ctx.injected_shader(name);  // VK_SUCCESS unless a test plans a fault here (gpu::FaultPlan)
+  if (loaded == VK_SUCCESS) loaded = vkCreateShaderModule(d, &mi, nullptr, &k.module_);
+  if (loaded != VK_SUCCESS) return vk_fail(fmt::format("loading shader {}", name), loaded);
 
   const auto n = static_cast<std::uint32_t>(buffers.size());
   std::vector<VkDescriptorSetLayoutBinding> bindings(n);

@@ -71,7 +71,9 @@ class GpuStepper final : public FrameStepper {
                                                    std::vector<control::ControlTarget> targets,
                                                    const control::ControlContext& ctx, const sim::ParticleSet& p) {
     std::unique_ptr<GpuStepper> s(new GpuStepper(sp, dom));
+    FF_TRY(const gpu::FaultPlan faults, gpu::fault_plan_from_env());  // none unless a test asks (FF_GPU_FAULT)
     FF_TRY(s->context_, gpu::Context::create({.device = device_index, .validation = false}));
+    s->context_->set_faults(faults);
     const gpu::DeviceInfo& info = s->context_->info();
     s->name_ = fmt::format("{} ({})", info.name, info.driver);
     FF_TRY(const gpu::GridSpec grid, gpu::GridSpec::for_support(dom.min, dom.max, s->solver_.lambda_consts().h));

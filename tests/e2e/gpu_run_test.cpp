@@ -7,8 +7,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <utility>
 
 namespace ff {
 namespace {
@@ -71,6 +74,60 @@ TEST(GpuRun, FormsAsTheCpuDoesRepeatsBitForBitAndResumes) {
   EXPECT_NE(resumed.err.find("resuming from frame"), std::string::npos) << resumed.err;
   EXPECT_TRUE(frame(dir / "gpu", 24) == frame(dir / "again", 24)) << "the resumed last frame differs";
   expect_no_temp_files(dir / "gpu");
+}
+
+// Faults injected at the Vulkan calls (gpu::FaultPlan, FF_GPU_FAULT): the error code a failing driver returns, and
+// the run takes its ordinary error path. Each is one line naming the cause, with a non-zero exit and no temporary
+// file; a device lost mid-run leaves the checkpoints, from which --resume finishes on the CPU and on the GPU.
+struct FaultEnv {
+  explicit FaultEnv(const char* v) { setenv("FF_GPU_FAULT", v, 1); }
+  ~FaultEnv() { unsetenv("FF_GPU_FAULT"); }
+};
+
+TEST(GpuRun, ADeviceLostOutOfMemoryOrABadShaderIsOneLineAndTheRunResumes) {
+  const auto dir = test::temp_dir("gpu_faults");
+  const fs::path scene = forming_scene(dir);  // 24 frames, a checkpoint every 8
+  auto one_line = [](const Outcome& r, const std::string& cause) {
+    EXPECT_NE(r.code, 0);
+    EXPECT_NE(r.err.find(cause), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  };
+  {
+    // ~10 submissions a frame (the frame, the downloads): the device is lost at frame 15, after the checkpoint at 8.
+    const FaultEnv lost("device-lost:150");
+    for (const char* out : {"lost_cpu", "lost_gpu"}) {
+      const auto r = run({"-q", "run", scene.string(), "-o", (dir / out).string(), "--device", "gpu", "--no-mesh"});
+      one_line(r, "VK_ERROR_DEVICE_LOST");
+      EXPECT_TRUE(fs::exists(dir / out / "particles" / "frame_00008.ply"));
+      EXPECT_FALSE(fs::exists(dir / out / "particles" / "frame_00024.ply"));
+      EXPECT_TRUE(fs::exists(dir / out / "checkpoint" / "state.ffck"));
+      expect_no_temp_files(dir / out);
+    }
+  }
+  for (const auto& [out, device] : {std::pair{"lost_cpu", "cpu"}, std::pair{"lost_gpu", "gpu"}}) {
+    const auto r = run({"run", scene.string(), "-o", (dir / out).string(), "--device", device, "--no-mesh", "--resume"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("resuming from frame"), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir / out / "particles" / "frame_00024.ply")) << out;
+    EXPECT_EQ(report(dir / out)["device"] == "cpu", std::string(device) == "cpu") << out;
+    expect_no_temp_files(dir / out);
+  }
+  {
+    const FaultEnv oom("out-of-memory:3");
+    const auto r = run({"-q", "run", scene.string(), "-o", (dir / "oom").string(), "--device", "gpu", "--no-mesh"});
+    one_line(r, "VK_ERROR_OUT_OF_DEVICE_MEMORY");
+    EXPECT_FALSE(fs::exists(dir / "oom" / "particles" / "frame_00001.ply"));
+    if (fs::exists(dir / "oom")) expect_no_temp_files(dir / "oom");
+  }
+  {
+    const FaultEnv shader("shader:pbf_lambda");
+    const auto r = run({"-q", "run", scene.string(), "-o", (dir / "shader").string(), "--device", "gpu", "--no-mesh"});
+    one_line(r, "loading shader pbf_lambda failed (VK_ERROR_INVALID_SHADER_NV)");
+    if (fs::exists(dir / "shader")) expect_no_temp_files(dir / "shader");
+  }
+  const FaultEnv bad("device-lost:soon");
+  const auto r = run({"-q", "run", scene.string(), "-o", (dir / "bad").string(), "--device", "gpu", "--no-mesh"});
+  one_line(r, "FF_GPU_FAULT");
 }
 
 TEST(GpuRun, WhatTheGpuDoesNotDoYetIsAOneLineErrorAndAutoFallsBack) {
