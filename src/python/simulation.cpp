@@ -25,10 +25,11 @@ struct ViewOwner {
 class Simulation {
  public:
   Simulation(const py::object& scene_arg, std::optional<std::string> controller, std::optional<std::string> cache_dir,
-             std::optional<double> max_memory, const py::object& progress) {
+             std::optional<double> max_memory, const std::string& device, const py::object& progress) {
     const scene::Scene scene = load_scene_argument(scene_arg);
     pipeline::LiveOptions opt;
     opt.controller = std::move(controller);
+    opt.device = device;  // "cpu", "gpu" or "auto": checked by LiveScene::create
     if (cache_dir) opt.cache_dir = *cache_dir;
     if (max_memory) {
       if (!(*max_memory >= 1.0 && *max_memory <= 1e9))
@@ -203,12 +204,13 @@ without a copy, in the solver's order (it sorts particles spatially between fram
 stays valid and unchanged after later steps (the solver then goes on with a copy). sorted() gives copies in id
 order, the order of the run's particle frames.)")
       .def(py::init<const py::object&, std::optional<std::string>, std::optional<std::string>, std::optional<double>,
-                    const py::object&>(),
+                    const std::string&, const py::object&>(),
            py::arg("scene"), py::kw_only(), py::arg("controller") = py::none(), py::arg("cache_dir") = py::none(),
-           py::arg("max_memory") = py::none(), py::arg("progress") = py::none(),
+           py::arg("max_memory") = py::none(), py::arg("device") = "cpu", py::arg("progress") = py::none(),
            "scene: a scene file path or a dict of scene keys; controller overrides the scene's; cache_dir holds the "
            "control-sample cache (default fluidform-out/cache, as a run's); max_memory: MiB the scene may need, checked "
-           "before anything is allocated (as run's); progress: callback(what, done, total).")
+           "before anything is allocated (as run's); device: 'cpu', 'gpu' or 'auto' (as run's --device); "
+           "progress: callback(what, done, total).")
       .def("step", &Simulation::step, py::arg("frames") = 1, py::kw_only(), py::arg("metrics") = true,
            "Advances `frames` frames of 1/fps s; returns the last frame's shape metrics (measured on the last frame "
            "only; metrics=False skips them, NaN) and the solver's wall time of the steps (step_seconds).")
@@ -227,6 +229,8 @@ order, the order of the run's particle frames.)")
       .def_property_readonly("ids", &Simulation::ids, "(N,) uint32 view: each row's stable particle id")
       .def_property("controller", [](const Simulation& s) { return s.live().controller_name(); },
                     &Simulation::set_controller, "the shape controller's name; assigning switches it")
+      .def_property_readonly("device", [](const Simulation& s) { return s.live().device(); },
+                             "what steps it: 'cpu', or the GPU's name and driver")
       .def_property_readonly("time", [](const Simulation& s) { return s.live().time(); }, "s simulated")
       .def_property_readonly("frame", [](const Simulation& s) { return s.live().frame(); })
       .def_property_readonly("fps", [](const Simulation& s) { return s.live().fps(); })

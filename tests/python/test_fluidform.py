@@ -231,6 +231,23 @@ def test_simulation_controller_pose_and_scene(tmp_path):
         sim.step(0)
 
 
+def test_simulation_on_the_gpu_device(tmp_path):
+    # Vulkan's first device (lavapipe where there is no GPU): the same Simulation, stepped on the device.
+    sim = ff.Simulation(small_scene(), device="gpu", cache_dir=str(tmp_path / "cache"))
+    assert sim.device != "cpu"
+    start = sim.sorted()["positions"]
+    f = sim.step(30)
+    assert f["controlled"] > 0
+    assert np.isfinite(sim.positions).all()
+    assert np.abs(sim.sorted()["positions"] - start).max() > 0.05  # it fell into the bunny
+    with pytest.raises(ff.ParamError, match="does not do the controller 'pbfc'"):
+        sim.controller = "pbfc"
+    assert sim.controller == "adaptive"
+    with pytest.raises(ff.ParamError, match="expected cpu, gpu or auto"):
+        ff.Simulation(small_scene(), device="tpu", cache_dir=str(tmp_path / "cache"))
+    assert ff.Simulation(small_scene(), cache_dir=str(tmp_path / "cache")).device == "cpu"
+
+
 def test_run_reports_progress_and_can_be_cancelled(tmp_path):
     calls = []
 
