@@ -30,9 +30,9 @@ struct DeviceInfo {
 Result<std::vector<DeviceInfo>> list_devices();
 
 /// Faults injected at the Vulkan calls, to test what the runs do when a real device fails (issue 45): the call
-/// returns the error code a failing driver returns, and everything above it takes its ordinary error path.
-/// `fluidform run --device gpu` reads them from FF_GPU_FAULT (fault_plan_from_env) into its Context (set_faults);
-/// nothing is injected by default.
+/// returns an error code it can return, and everything above it takes its ordinary error path. Every GPU stepper
+/// (pipeline/stepper.h: run, compare, serve) reads them from FF_GPU_FAULT (fault_plan_from_env) into its Context
+/// (set_faults); nothing is injected by default.
 struct FaultPlan {
   long device_lost_at_submit = 0;  ///< the n-th queue submission (from 1) and every later one: VK_ERROR_DEVICE_LOST
   long oom_at_allocation = 0;      ///< the n-th buffer allocation (from 1): VK_ERROR_OUT_OF_DEVICE_MEMORY

@@ -372,13 +372,18 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   stamp(cb);
 }
 
+// The buffer and both kernels, kept only once all three exist: a failure leaves omega_ empty, so the next sub-step
+// that asks for vorticity tries again instead of dispatching half-made kernels.
 Status PbfDevice::make_vorticity_kernels() {
   Context& ctx = *ctx_;
-  FF_TRY(omega_, DeviceBuffer::create(ctx, n_ * 16));
-  FF_TRY(vort_omega_k_, Kernel::create(ctx, "vort_omega", shaders::vort_omega(),
-                                       {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega_}));
-  FF_TRY(vort_apply_k_, Kernel::create(ctx, "vort_apply", shaders::vort_apply(),
-                                       {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega_}));
+  FF_TRY(DeviceBuffer omega, DeviceBuffer::create(ctx, n_ * 16));
+  FF_TRY(Kernel w, Kernel::create(ctx, "vort_omega", shaders::vort_omega(),
+                                  {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega}));
+  FF_TRY(Kernel apply, Kernel::create(ctx, "vort_apply", shaders::vort_apply(),
+                                      {&next_, &cell_, &start_, &items_, &vel_, &density_, &omega}));
+  omega_ = std::move(omega);  // the kernels' descriptor sets hold the buffer's handle, which the move keeps
+  vort_omega_k_ = std::move(w);
+  vort_apply_k_ = std::move(apply);
   return {};
 }
 
@@ -386,7 +391,7 @@ Status PbfDevice::make_vorticity_kernels() {
 // PbfSolver::vorticity_confinement. c is the sweeps' block (h, m, Spiky kgrad); k2.y carries Δt ε_v.
 void PbfDevice::record_vorticity(VkCommandBuffer cb, const Constants& c, const sim::PbfForceConsts& fk) const {
   Constants cv = c;
-  cv.k2[1] = fk.dt * fk.vorticity, cv.k2[3] = fk.dt;
+  cv.k2[1] = fk.dt * fk.vorticity;
   vort_omega_k_.dispatch(cb, &cv, groups(n_, 128));
   compute_barrier(cb);
   vort_apply_k_.dispatch(cb, &cv, groups(n_, 128));

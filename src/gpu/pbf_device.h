@@ -101,8 +101,8 @@ class PbfDevice {
     int iterations = 4, max_iterations = 4;
     float target = 0.0f;
   };
-  /// One sub-step of the state (sim::PbfSolver::substep with the controller of set_controller(), without surface
-  /// tension or vorticity): the grid on x, ρ(x), the forces and x*, the sweeps, v = (x* − x)/Δt and x = x*. One
+  /// One sub-step of the state (sim::PbfSolver::substep with the controller of set_controller(), surface tension and
+  /// vorticity when fk asks for them): the grid on x, ρ(x), the forces and x*, the sweeps, v = (x* − x)/Δt and x = x*. One
   /// submission; waits for it.
   Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                  const Sweeps& sweeps, PassTimes* times = nullptr);

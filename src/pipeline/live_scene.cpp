@@ -27,6 +27,10 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
   FF_TRY(s->device_, parse_device(options.device));
   FF_CHECK(check_device(s->device_, s->scene_.controller, s->scene_.targets));
+  if (s->device_ == Device::Auto && !auto_finds_gpu()) {  // decided once, not at every restart or switch
+    spdlog::info("--device auto: no discrete or integrated GPU, running on the CPU");
+    s->device_ = Device::Cpu;
+  }
   FF_TRY(s->geometry_, load_target_meshes(s->scene_));
   // A live preview keeps sampling.auto_count (10k: display rate on two cores) where `run` would raise it for thin
   // walls (~40k for the bunny, ~3 frames a second): the thin-wall line still says what would resolve them.
@@ -84,10 +88,11 @@ Status LiveScene::rebuild_controller() {
       controller_.reset();
       return {};
     }
-    gpu_.reset();  // auto, and no GPU (or a scene it does not do): said once by make_stepper, then the CPU as always
+    // auto with a controller the GPU path does not have (make_stepper said so): this one runs on the CPU.
   }
   FF_TRY(auto c, control::make_controller(scene_.controller, std::move(targets), ctx_));
   controller_ = std::move(c);
+  gpu_.reset();
   return {};
 }
 
@@ -150,9 +155,9 @@ Result<LivePose> LiveScene::set_pose(std::size_t t, const LivePose& in) {
   const Vec3f lo = scene_.domain.min - targets_[t].pivot, hi = scene_.domain.max - targets_[t].pivot;
   p.translate = p.translate.cwiseMax(lo).cwiseMin(hi);
   const pose::Pose pose = pose::make_pose(p.translate, p.rotate_deg, p.scale);
-  motions_[t].live = pose;
-  if (gpu_) FF_CHECK(gpu_->set_target_pose(t, pose));
+  if (gpu_) FF_CHECK(gpu_->set_target_pose(t, pose));  // first: its upload may fail, and then nothing has moved
   else if (auto* s = control::steerable(*controller_)) s->set_target_pose(t, pose);
+  motions_[t].live = pose;
   targets_[t].pose = p;
   return p;
 }

@@ -117,6 +117,11 @@ Result<int> pick_gpu(bool any) {
 
 }  // namespace
 
+bool auto_finds_gpu() {
+  Result<int> index = pick_gpu(false);
+  return index && *index >= 0;
+}
+
 Status check_device(Device device, const control::ControllerSpec& spec, std::span<const scene::TargetSpec> targets) {
   if (device != Device::Gpu) return {};
   std::string gap = gpu_gap(spec);

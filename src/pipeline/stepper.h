@@ -43,6 +43,9 @@ class FrameStepper {
   virtual Status set_target_pose(std::size_t t, const pose::Pose& pose) = 0;
 };
 
+/// Whether `--device auto` finds a GPU to run on here: a discrete or integrated Vulkan device with a compute queue.
+bool auto_finds_gpu();
+
 /// The stepper for `device`. `spec.name` "none" runs plain PBF. GPU: the first discrete or integrated GPU, else any
 /// Vulkan device (lavapipe on a machine without a GPU); a scene the GPU path does not do yet is a one-line error.
 /// Auto: the GPU when there is a discrete or integrated one and the scene is one it does, else the CPU (said once,

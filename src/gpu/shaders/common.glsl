@@ -38,6 +38,12 @@ uint cell_index(ivec3 c) { return uint(c.x + C.grid_dims.x * (c.y + C.grid_dims.
         const uint CELL = cell_index(ivec3(dx, dy, dz));
 #define END_FOR_CELLS }
 
+// Spiky ∇W(r) (core::Spiky::grad) for r = x_i − x_j with r² = |r|² in (0, h²): kgrad (h − |r|)² r̂.
+vec3 spiky_grad(vec3 r, float r2, float h, float kgrad) {
+  const float len = sqrt(r2), q = h - len;
+  return (kgrad * q * q / len) * r;
+}
+
 ivec3 cell_of_index(uint c) {
   const uint nx = uint(C.grid_dims.x), ny = uint(C.grid_dims.y);
   return ivec3(int(c % nx), int((c / nx) % ny), int(c / (nx * ny)));

@@ -26,9 +26,7 @@ void main() {
       const vec3 r = xi - x0[j].xyz;
       const float r2 = dot(r, r);
       if (r2 >= h2 || r2 <= 0.0) continue;
-      const float len = sqrt(r2), q = h - len;
-      const vec3 grad = (kgrad * q * q / len) * r;
-      eta += ((mass / density[j]) * length(omega[j].xyz)) * grad;
+      eta += ((mass / density[j]) * length(omega[j].xyz)) * spiky_grad(r, r2, h, kgrad);
     }
   END_FOR_CELLS
   const float len = length(eta);

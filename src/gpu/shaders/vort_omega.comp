@@ -3,7 +3,7 @@
 // Vorticity confinement, step 1 (sim/pbf_solver.cpp, vorticity_confinement; Fedkiw 2001 as PBF uses it), after the
 // update: per particle i, ω_i = Σ_j (m/ρ_j)(v_j − v_i) × ∇W(x_i − x_j) over its neighbours at x (the start of the
 // sub-step, where the grid was built), with the new velocities and the last sweep's densities. Gather only.
-// k2: x Spiky kgrad, w Δt (the update's constants are not this pass's).
+// k2: x Spiky kgrad (the sweeps' block; the update's constants are not this pass's).
 layout(local_size_x = 128) in;
 #include "common.glsl"
 layout(std430, binding = 0) readonly buffer X0 { vec4 x0[]; };  // x at the start of the sub-step (copied out)
@@ -27,9 +27,7 @@ void main() {
       const vec3 r = xi - x0[j].xyz;
       const float r2 = dot(r, r);
       if (r2 >= h2 || r2 <= 0.0) continue;  // ∇W is 0 there (core::Spiky::grad)
-      const float len = sqrt(r2), q = h - len;
-      const vec3 grad = (kgrad * q * q / len) * r;
-      w += (mass / density[j]) * cross(vel[j].xyz - vi, grad);
+      w += (mass / density[j]) * cross(vel[j].xyz - vi, spiky_grad(r, r2, h, kgrad));
     }
   END_FOR_CELLS
   omega[i] = vec4(w, 0.0);
