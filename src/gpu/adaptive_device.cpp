@@ -62,7 +62,6 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   FF_CHECK(samples.init(std::move(targets), "adaptive (GPU)",
                         {.cell_order = false, .weights = params.weights, .normals = true, .velocities = true}));
   if (samples.size() == 0) return input_error("adaptive (GPU): the targets have no control samples");
-  a->moving_ = samples.moving();
   a->fluid_ = &fluid;
   a->params_ = params;
   a->ctx_ = ctx;
@@ -177,8 +176,7 @@ Status AdaptiveDevice::make_seed_field(std::size_t targets) {
 
 Status AdaptiveDevice::set_target_pose(std::size_t t, const pose::Pose& pose) {
   if (t >= samples_.targets()) return {};
-  samples_.set_target_pose(t, pose);
-  moving_ = true;
+  samples_.set_target_pose(t, pose);  // from now on samples_.moving(): poses are uploaded every frame
   return upload_moving();
 }
 
@@ -267,7 +265,7 @@ Status AdaptiveDevice::prepare_frame(double time, float dt, int substeps) {
   if (substeps <= 0) return {};
   const auto steps = static_cast<std::size_t>(substeps);
   if (timed_) FF_CHECK(prepare_strengths(time, dt, steps));
-  if (!moving_) return {};
+  if (!samples_.moving()) return {};
   Context& c = fluid_->context();
   if (steps > pose_steps_) {
     FF_TRY(pose_pos_, DeviceBuffer::create(c, steps * m_ * 16));
@@ -328,7 +326,7 @@ void AdaptiveDevice::record_begin(VkCommandBuffer cb, float dt, int substep) con
     vkCmdCopyBuffer(cb, step_strength_.handle(), t_strength_.handle(), 1, &slice);
     compute_barrier(cb);
   }
-  if (moving_ && static_cast<std::size_t>(substep) < pose_steps_) {
+  if (samples_.moving() && static_cast<std::size_t>(substep) < pose_steps_) {
     // This sub-step's pose into the samples' buffers, then the samples into their grids again.
     const VkBufferCopy slice{static_cast<VkDeviceSize>(substep) * m_ * 16, 0, m_ * 16};
     vkCmdCopyBuffer(cb, pose_pos_.handle(), s_pos_.handle(), 1, &slice);

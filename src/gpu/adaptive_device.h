@@ -79,8 +79,9 @@ class AdaptiveDevice final : public DeviceController {
   Status upload_moving();
 
   PbfDevice* fluid_ = nullptr;
-  control::ControlSamples samples_;  // posed on the host, as the CPU controller poses its own
-  bool moving_ = false;              // some target moves: poses are uploaded every frame
+  // Posed on the host, as the CPU controller poses its own; while moving() (keyframes, a skin, a live pose), every
+  // frame's poses are uploaded.
+  control::ControlSamples samples_;
   DeviceBuffer s_vel_, t_moving_;    // u_c per sample (0 when static); per target 1 when it moves
   bool timed_ = false;               // some target starts late or has a strength track: strengths every sub-step
   DeviceBuffer t_strength_;          // per target, its strength in this sub-step (1 throughout when not timed_)

@@ -28,6 +28,17 @@ struct Scene {
     c.sp.max_iterations = c.sp.iterations;                                    // a fixed sweep count on both
     params.gather = false;                                                    // not on the device yet
   }
+  /// The column of fluid above the sphere, every particle of target 0.
+  sim::ParticleSet column() const {
+    sim::ParticleSet p;
+    EXPECT_TRUE(sim::fill_sources(c.fluid, c.dom, c.sp.particle_radius, p).ok());
+    std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+    return p;
+  }
+  /// The controllers' context with `solver`'s particle mass.
+  void use(const sim::PbfSolver& solver) {
+    ctx = {c.sp.particle_radius, solver.particle_mass(), c.sp.rest_density, c.sp.gravity, c.dom, c.sp.support()};
+  }
   std::vector<control::ControlTarget> targets() const {
     std::vector<control::ControlTarget> t(1);
     t[0].set = c.set;
@@ -43,12 +54,10 @@ std::vector<Vec3f> by_id(const sim::ParticleSet& p, std::span<const Vec3f> v) {
 
 TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
   Scene s;
-  sim::ParticleSet p;
-  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
-  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
-  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  s.use(solver);
   auto cpu_ctl = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
   ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
   // The column falls into the sphere: after 40 frames most of it is held.
@@ -120,12 +129,10 @@ TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
 TEST(GpuAdaptive, GatherFormsTheSphereAsTheCpuDoes) {
   Scene s;
   s.params.gather = true;
-  sim::ParticleSet p;
-  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
-  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::ParticleSet p = s.column();
   const sim::ParticleSet start = p;
   sim::PbfSolver solver(s.c.sp, s.c.dom);
-  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  s.use(solver);
   auto cpu_ctl = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
   ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
   constexpr int kFrames = 40;
@@ -200,12 +207,10 @@ TEST(GpuAdaptive, AMovingTargetTracksTheCpuController) {
     t[0].motion = motion;
     return t;
   };
-  sim::ParticleSet p;
-  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
-  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
-  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  s.use(solver);
   auto cpu_ctl = control::AdaptiveController::create(targets(), s.ctx, s.params);
   ASSERT_TRUE(cpu_ctl.has_value()) << cpu_ctl.error().message;
   for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **cpu_ctl).has_value());
@@ -265,12 +270,10 @@ struct TimedFrame {
 TEST(GpuAdaptive, AStrengthTrackAndALateStartTrackTheCpuController) {
   Scene s;
   s.params.gather = true;
-  sim::ParticleSet p;
-  ASSERT_TRUE(sim::fill_sources(s.c.fluid, s.c.dom, s.c.sp.particle_radius, p).ok());
-  std::fill(p.target.begin(), p.target.end(), std::uint8_t{0});
+  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
-  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  s.use(solver);
   {
     auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
     ASSERT_TRUE(formed.has_value()) << formed.error().message;
@@ -353,7 +356,7 @@ TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   auto ctx = Context::create({.device = -1, .validation = false});
   ASSERT_TRUE(ctx.has_value());
   const sim::PbfSolver solver(s.c.sp, s.c.dom);
-  s.ctx = {s.c.sp.particle_radius, solver.particle_mass(), s.c.sp.rest_density, s.c.sp.gravity, s.c.dom, s.c.sp.support()};
+  s.use(solver);
   auto dev = PbfDevice::create(**ctx, 100, GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
   ASSERT_TRUE(dev.has_value());
   control::AdaptiveParams kinematic = s.params;

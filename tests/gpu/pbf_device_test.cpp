@@ -242,6 +242,19 @@ std::vector<Vec3f> by_id(const sim::ParticleSet& p, const std::vector<Vec3f>& va
 // The sub-steps of a state, on the CPU (cluster passes, no controller, a fixed sweep count) and on the device.
 struct SubstepRun {
   std::vector<Vec3f> cx, cv, gx, gv;  // by particle id
+  /// GPU − CPU per particle, |Δx| in spacings `d`, sorted.
+  std::vector<double> apart(float d) const {
+    std::vector<double> dx(gx.size());
+    for (std::size_t i = 0; i < gx.size(); ++i) dx[i] = (gx[i] - cx[i]).norm() / d;
+    std::sort(dx.begin(), dx.end());
+    return dx;
+  }
+  /// GPU − CPU, the largest |Δv|.
+  double largest_dv() const {
+    double dv = 0;
+    for (std::size_t i = 0; i < gv.size(); ++i) dv = std::max(dv, double((gv[i] - cv[i]).norm()));
+    return dv;
+  }
 };
 SubstepRun run_substeps(const sim::SolverParams& sp, const sim::Domain& dom, const sim::ParticleSet& start, float dt,
                         int steps, Context& ctx) {
@@ -290,14 +303,10 @@ TEST(GpuPbf, SubstepsTrackTheCpuSolver) {
   ASSERT_TRUE(ctx);
   const SubstepRun r = run_substeps(sp, dom, start, kDt, kSteps, *ctx);
   ASSERT_EQ(r.gx.size(), start.size());
-  std::vector<double> dx(r.gx.size());
-  double dv = 0, speed = 0;
-  for (std::size_t i = 0; i < r.gx.size(); ++i) {
-    dx[i] = (r.gx[i] - r.cx[i]).norm() / sp.spacing();
-    dv = std::max(dv, double((r.gv[i] - r.cv[i]).norm()));
-    speed = std::max(speed, double(r.cv[i].norm()));
-  }
-  std::sort(dx.begin(), dx.end());
+  const std::vector<double> dx = r.apart(sp.spacing());
+  const double dv = r.largest_dv();
+  double speed = 0;
+  for (const Vec3f& v : r.cv) speed = std::max(speed, double(v.norm()));
   const double median = dx[dx.size() / 2], p99 = dx[dx.size() * 99 / 100], worst = dx.back();
   std::printf("%d sub-steps of %zu particles: GPU − CPU |Δx|/d median %.2e, 99th %.2e, largest %.2e; largest |Δv| %.2e m/s "
               "(speeds up to %.2f m/s)\n",
@@ -329,14 +338,10 @@ TEST(GpuPbf, VorticityConfinementTracksTheCpuSolver) {
   without.vorticity = 0.0f;
   const SubstepRun r0 = run_substeps(without, dom, start, kDt, kSteps, *ctx);
   ASSERT_EQ(r.gx.size(), start.size());
-  std::vector<double> dx(r.gx.size());
-  double dv = 0, effect = 0;
-  for (std::size_t i = 0; i < r.gx.size(); ++i) {
-    dx[i] = (r.gx[i] - r.cx[i]).norm() / sp.spacing();
-    dv = std::max(dv, double((r.gv[i] - r.cv[i]).norm()));
-    effect = std::max(effect, double((r.cv[i] - r0.cv[i]).norm()));
-  }
-  std::sort(dx.begin(), dx.end());
+  const std::vector<double> dx = r.apart(sp.spacing());
+  const double dv = r.largest_dv();
+  double effect = 0;
+  for (std::size_t i = 0; i < r.cv.size(); ++i) effect = std::max(effect, double((r.cv[i] - r0.cv[i]).norm()));
   std::printf("%d sub-steps with vorticity confinement: GPU − CPU |Δx|/d median %.2e, largest %.2e; largest |Δv| %.2e "
               "m/s, where the confinement changed velocities by up to %.2e m/s\n",
               kSteps, dx[dx.size() / 2], dx.back(), dv, effect);

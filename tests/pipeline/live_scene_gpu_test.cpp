@@ -2,6 +2,7 @@
 // the device, a steered target (static until then) is followed there, a controller the GPU path does not have is a
 // one-line error that keeps the running one, and switching, swapping the mesh and restarting rebuild it on the device.
 #include "pipeline/live_scene.h"
+#include "pipeline/live_scene_cases.h"
 #include "scene/scene.h"
 #include "support/test_support.h"
 
@@ -15,16 +16,7 @@ namespace fs = std::filesystem;
 
 TEST(LiveSceneGpu, StepsSteersSwitchesAndRestartsOnTheDevice) {
   const fs::path dir = test::temp_dir("live-scene-gpu");
-  test::write_obj(dir / "sphere.obj", test::sphere_mesh(1.0f, 3));
-  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.8f, -0.8f, -0.8f), Vec3f(0.8f, 0.8f, 0.8f)));
-  auto scene = scene::parse_scene(R"({"targets": [{"mesh": "sphere.obj", "scale": 0.15}], "sampling": {"auto_count": 600}})",
-                                  dir);
-  ASSERT_TRUE(scene) << scene.error().message;
-  LiveOptions lo;
-  lo.cache_dir = dir / "cache";
-  lo.extra_meshes = {dir / "box.obj"};
-  lo.device = "gpu";
-  auto made = LiveScene::create(*scene, lo, core::null_progress());
+  auto made = test_cases::sphere_live_scene(dir, "gpu");
   ASSERT_TRUE(made) << made.error().message;
   LiveScene& s = **made;
   EXPECT_NE(s.device(), "cpu");

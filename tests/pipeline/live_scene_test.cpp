@@ -2,6 +2,7 @@
 // against the moved target, and the pose is kept inside the domain), switches controllers, swaps the mesh for
 // another from the list, and restarts — on a small sphere so that it runs in seconds.
 #include "pipeline/live_scene.h"
+#include "pipeline/live_scene_cases.h"
 #include "scene/scene.h"
 #include "support/test_support.h"
 
@@ -15,15 +16,7 @@ namespace fs = std::filesystem;
 
 TEST(LiveScene, StepSteerSwitchSwapRestart) {
   const fs::path dir = test::temp_dir("live-scene");
-  test::write_obj(dir / "sphere.obj", test::sphere_mesh(1.0f, 3));
-  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.8f, -0.8f, -0.8f), Vec3f(0.8f, 0.8f, 0.8f)));
-  auto scene = scene::parse_scene(R"({"targets": [{"mesh": "sphere.obj", "scale": 0.15}], "sampling": {"auto_count": 600}})",
-                               dir);
-  ASSERT_TRUE(scene) << scene.error().message;
-  LiveOptions lo;
-  lo.cache_dir = dir / "cache";
-  lo.extra_meshes = {dir / "box.obj"};
-  auto made = LiveScene::create(*scene, lo, core::null_progress());
+  auto made = test_cases::sphere_live_scene(dir, "cpu");
   ASSERT_TRUE(made) << made.error().message;
   LiveScene& s = **made;
   ASSERT_EQ(s.meshes().size(), 2u);
