@@ -74,6 +74,7 @@ Result<std::unique_ptr<AdaptiveController>> AdaptiveController::create(std::vect
   const double s0 = full_gradient_sum(d, c->hc_, ctx.particle_mass, rho_ref);
   c->eps_c_ = static_cast<float>(params.epsilon * s0);
   c->fill_.assign(c->samples_.size(), 0.0f);
+  c->speed_scale_ = speed_scales(c->samples_.target, c->samples_.targets(), params.speed_reference);
   // The gather field covers the domain at the control support (coarser on a huge domain).
   c->seed_field_.resize(c->samples_.targets());
   for (auto& f : c->seed_field_) f.reset(ctx.domain.min, ctx.domain.max, c->hc_);
@@ -97,7 +98,10 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
   // u_c over this sub-step (forward difference): moving targets carry their fluid along (AdaptiveParams::follow).
-  if (samples_.update(view.time, view.dt)) fill_.assign(samples_.size(), 0.0f);
+  if (samples_.update(view.time, view.dt)) {
+    fill_.assign(samples_.size(), 0.0f);
+    speed_scale_ = speed_scales(samples_.target, samples_.targets(), params_.speed_reference);
+  }
   const std::size_t n = p.size(), m = samples_.position.size();
   // Control–fluid pairs within H_c, one query per sub-step on the positions at its start (samples → fluid); the
   // fluid → sample bonds are its transpose, built below.
@@ -316,13 +320,14 @@ void AdaptiveController::add_accelerations(const sim::StepView& view, sim::Parti
   // moving target, v* is first pulled toward the pose velocity u_c of the particle's nearest bonded sample, and the
   // limit holds for v* − u_c: fluid is carried along with the moving shape, at any speed of the shape.
   {
-    const float vmax = params_.max_speed * d_, dt = view.dt;
+    const float vmax_ref = params_.max_speed * d_, dt = view.dt;
     const Vec3f* v = p.velocity.data();
     const bool follow = samples_.moving() && params_.follow > 0.0f;
     const float k = std::min(1.0f, params_.follow * dt / kReferenceDt);
     parallel_for(static_cast<std::int64_t>(n), [&](std::int64_t jj) {
       const auto j = static_cast<std::size_t>(jj);
       if (bond_off_[j] == bond_off_[j + 1]) return;
+      const float vmax = vmax_ref * speed_of(p.target[j]);
       if (follow && target_moving_[p.target[j]]) {  // a static target's fluid (u_c = 0) is not damped
         const float s = softened_ ? strength_[p.target[j]] : 1.0f;
         const Vec3f u = samples_.velocity[nearest_[j]];
@@ -356,7 +361,7 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
         if (samples_.target[i] == t && fill_[i] < params_.gather_fill) seeds_.push_back(static_cast<Index>(i));
     seed_field_[t].compute(samples_.position, seeds_);
   }
-  const float speed = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
+  const float speed_ref = params_.gather_speed * d_, inv_tau = 1.0f / params_.gather_time;
   // On a moving target the seed moves too: the steering velocity adds the seed's pose velocity (see follow), so fluid
   // shed by a fast limb catches up with it instead of chasing where it was, and closes in at least at a share of that
   // speed (gather_chase): at gather_speed alone it never caught a limb swinging ten times faster.
@@ -375,6 +380,7 @@ void AdaptiveController::gather(sim::ParticleSet& p) {
     const Vec3f to = samples_.position[s] - x[j];
     const float len = to.norm();
     if (len <= 0.0f) return;
+    const float speed = speed_ref * speed_of(t);
     Vec3f v_des;
     if (chase) {  // closing in at least at a share of the seed's own speed, on top of following it
       const Vec3f& u = samples_.velocity[s];
@@ -437,7 +443,11 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   sample_lambdas(p);
   if (std::getenv("FF_DEBUG_ACTIVE")) print_active_set();
   if (active_.empty()) return;  // every sample is full: no correction anywhere
-  const CorrectionLimit limit{params_.alpha, params_.clamp * d_ * std::min(1.0f, dt / kReferenceDt), params_.kinematic};
+  // The clamp in spacings, × each target's speed factor (at most one spacing), × Δt/Δt_ref.
+  max_dx_.resize(samples_.targets());
+  for (std::size_t t = 0; t < max_dx_.size(); ++t)
+    max_dx_[t] = std::min(1.0f, params_.clamp * speed_scale_[t]) * d_ * std::min(1.0f, dt / kReferenceDt);
+  const CorrectionLimit limit{params_.alpha, max_dx_.data(), params_.kinematic};
   // Once a target has formed only a few (surface) samples are still under-filled: then the sum is scattered from
   // those samples, instead of every fluid particle walking its ~270 bonds to find them.
   if (active_.size() * 8 < samples_.position.size()) scatter_correction(p, limit);
@@ -507,8 +517,8 @@ void AdaptiveController::print_active_set() const {
 
 void AdaptiveController::CorrectionLimit::apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const {
   dx *= alpha;
-  const float d2 = dx.squaredNorm();
-  if (d2 > max_dx * max_dx) dx *= max_dx / std::sqrt(d2);
+  const float d2 = dx.squaredNorm(), m = max_dx[p.target[j]];  // a bonded particle's target has samples
+  if (d2 > m * m) dx *= m / std::sqrt(d2);
   p.predicted[j] += dx;
   if (kinematic) p.shift[j] += dx;
 }

@@ -57,7 +57,8 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   void control_correction(sim::ParticleSet& p, float dt);
   // The scale α and the clamp of a control displacement Δx_j (METHOD §a.3), applied to x*_j (and the shift).
   struct CorrectionLimit {
-    float alpha, max_dx;
+    float alpha;
+    const float* max_dx;  // per target
     bool kinematic;
     void apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const;
   };
@@ -89,6 +90,10 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   std::vector<float> strength_;     // per target: its control strength in this sub-step (control/strength.h)
   bool softened_ = false;           // some target acts with a strength below 1
   std::vector<std::uint8_t> target_moving_;  // per target: it moves (follow applies to its fluid)
+  // Per target, the factor its speeds run at (AdaptiveParams::speed_reference), from its current sample set.
+  std::vector<float> speed_scale_;
+  std::vector<float> max_dx_;       // per target, the clamp of this sub-step's corrections
+  float speed_of(std::uint8_t t) const { return t < speed_scale_.size() ? speed_scale_[t] : 1.0f; }
   core::NeighborGrid fluid_grid_;
   core::NeighborList cf_;           // sample i → fluid within H_c
   std::vector<float> fill_, bond_radius2_, lambda_;  // ρ_p/ρ_c at the start of the sub-step; bond radius H_c*²; λ

@@ -8,9 +8,10 @@
 #include "core/fields.h"
 
 #include <array>
-
+#include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 namespace ff::control {
 
@@ -72,6 +73,14 @@ struct AdaptiveParams {
   /// "seventh part"). Static targets (u_c = 0) are not affected, nor is anything with follow = 0 (no chase at all).
   /// [0, 10]; 0 = the approach at gather_speed only.
   float gather_chase = 1.0f;
+  /// The count of control samples per target the three speeds above (clamp, max_speed, gather_speed, all in spacings
+  /// per second) were set at (ours, issue 44). A target of N_t samples runs them × max(1, (N_t / this)^(1/3)): the
+  /// same speeds in target sizes per second at any resolution, so a finer target forms in the same simulated time
+  /// and its fluid is not held back at a speed a 10k target needed. Measured: the 100k bunny at × 1 formed at 5.4 s
+  /// and let ~3 % go once the sub-steps grew; at its spacing ratio (× 2.15) it formed at 2.50 s and held to 25 s
+  /// (bench/RESULTS.md, "Detail at scale, sixth part"). The clamp stays at most one spacing per iteration.
+  /// [0, 1e9]; 0 = the speeds as written at every count.
+  float speed_reference = 12000.0f;
 
   template <class S, class F>
   static void fields(S& s, F&& f) {
@@ -93,9 +102,15 @@ struct AdaptiveParams {
     f("gather_speed", s.gather_speed, open_closed(0.0, 1000.0, "steering speed of unbonded fluid, d/s"));
     f("gather_time", s.gather_time, open_closed(0.0, 10.0, "s, time constant of the steering"));
     f("gather_chase", s.gather_chase, closed(0.0, 10.0, "moving targets: least approach speed toward a seed, × its |u_c|"));
+    f("speed_reference", s.speed_reference,
+      closed(0.0, 1e9, "samples per target the speeds are set at: clamp, max_speed, gather_speed × max(1, (N_t/this)^⅓); 0 = off"));
   }
   /// First violation, naming `path.key`, the value and the range.
   Status validate(std::string_view path = "controller.adaptive") const { return core::validate_fields(*this, path); }
 };
+
+/// Per target, the factor its speeds run at (AdaptiveParams::speed_reference): max(1, (N_t / reference)^(1/3)) with
+/// N_t its count in `target` (each sample's target); 1 everywhere when reference is 0.
+std::vector<float> speed_scales(const std::vector<std::uint8_t>& target, std::size_t targets, float reference);
 
 }  // namespace ff::control

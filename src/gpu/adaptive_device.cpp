@@ -88,7 +88,7 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
                                       &a->s_bond_r2_, &a->nearest_}));
   FF_TRY(a->accel_k_, Kernel::create(c, "ctl_accel", shaders::ctl_accel(),
                                      {&a->nearest_, &a->s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer(),
-                                      &a->f_target_, &a->s_vel_, &a->t_moving_, &a->t_strength_}));
+                                      &a->f_target_, &a->s_vel_, &a->t_moving_, &a->t_strength_, &a->t_speed_}));
   FF_TRY(a->spring_k_, Kernel::create(c, "ctl_spring", shaders::ctl_spring(),
                                       {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
                                        &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos, &a->s_vel_, &a->t_strength_}));
@@ -97,7 +97,7 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
                                        &fitems, &a->f_target_, &a->s_coef_, &a->s_vel_, &a->t_strength_}));
   FF_TRY(a->correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
                                        {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                        &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos, &a->s_vel_}));
+                                        &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos, &a->s_vel_, &a->t_speed_}));
   if (params.gather) FF_CHECK(a->make_seed_field(samples.targets()));
   return a;
 }
@@ -122,6 +122,13 @@ Status AdaptiveDevice::make_buffers() {
   FF_TRY(t_strength_, DeviceBuffer::create(c, samples_.targets() * 4));
   const std::vector<float> full(samples_.targets(), 1.0f);  // a timed scene's are copied in every sub-step
   FF_CHECK(t_strength_.upload(full.data(), full.size() * 4));
+  // The speeds' factors as the CPU controller's (AdaptiveController::speed_scale_, max_dx_).
+  const std::vector<float> scale = control::speed_scales(samples_.target, samples_.targets(), params_.speed_reference);
+  std::vector<float> speed(2 * scale.size());
+  for (std::size_t t = 0; t < scale.size(); ++t)
+    speed[2 * t] = scale[t], speed[2 * t + 1] = std::min(1.0f, params_.clamp * scale[t]) / params_.clamp;
+  FF_TRY(t_speed_, DeviceBuffer::create(c, speed.size() * 4));
+  FF_CHECK(t_speed_.upload(speed.data(), speed.size() * 4));
   const std::vector<float> still(4 * m, 0.0f);
   FF_CHECK(s_vel_.upload(still.data(), still.size() * 4));
   const std::vector<float> pos = packed(samples_.position), nrm = packed(samples_.normal);
@@ -170,7 +177,7 @@ Status AdaptiveDevice::make_seed_field(std::size_t targets) {
   FF_TRY(flood_ba_k_, Kernel::create(c, "ctl_seed_flood", shaders::ctl_seed_flood(), {&s_pos_, &seed_b_, &seed_a_}));
   FF_TRY(gather_k_, Kernel::create(c, "ctl_gather", shaders::ctl_gather(),
                                    {&fluid_->x_buffer(), &f_target_, &nearest_, &s_pos_, &seed_a_, &fluid_->velocity_buffer(),
-                                    &fluid_->acceleration_buffer(), &s_vel_, &t_strength_}));
+                                    &fluid_->acceleration_buffer(), &s_vel_, &t_strength_, &t_speed_}));
   return {};
 }
 

@@ -86,6 +86,9 @@ class AdaptiveDevice final : public DeviceController {
   bool timed_ = false;               // some target starts late or has a strength track: strengths every sub-step
   DeviceBuffer t_strength_;          // per target, its strength in this sub-step (1 throughout when not timed_)
   DeviceBuffer step_strength_;       // the frame's sub-steps' strengths, targets after targets
+  // Per target (x, y): the factor of max_speed and gather_speed, and of the clamp (at most one spacing), from
+  // control::speed_scales.
+  DeviceBuffer t_speed_;
   std::size_t strength_steps_ = 0;   // sub-steps step_strength_ has room for
   DeviceBuffer pose_pos_, pose_vel_, pose_nrm_;  // the frame's sub-steps' poses, one after the other
   std::size_t pose_steps_ = 0;       // sub-steps pose_pos_ has room for

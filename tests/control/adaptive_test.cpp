@@ -137,6 +137,39 @@ TEST(Adaptive, IsIndependentOfTheThreadCount) {
   for (std::size_t i = 0; i < one.x.size(); ++i) ASSERT_EQ(one.x[i], two.x[i]) << "particle " << i;
 }
 
+TEST(Adaptive, SpeedScalesGrowWithTheCubeRootOfATargetsSampleCount) {
+  const std::vector<std::uint8_t> target = {0, 1, 1, 1, 1, 1, 1, 1, 1, 2};  // 1, 8 and 1 samples; target 3 has none
+  const auto s = control::speed_scales(target, 4, 1.0f);
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_FLOAT_EQ(s[0], 1.0f);
+  EXPECT_FLOAT_EQ(s[1], 2.0f);
+  EXPECT_FLOAT_EQ(s[2], 1.0f);
+  EXPECT_FLOAT_EQ(s[3], 1.0f);  // never below 1
+  EXPECT_FLOAT_EQ(control::speed_scales(target, 4, 0.125f)[0], 2.0f);
+  for (const float f : control::speed_scales(target, 4, 0.0f)) EXPECT_EQ(f, 1.0f);  // 0: off
+  for (const float f : control::speed_scales(target, 4, 100.0f)) EXPECT_EQ(f, 1.0f);  // fewer than the reference
+}
+
+// A target with 8× the reference's samples runs its three speeds × 2: exactly as those speeds doubled by hand. A target
+// below the reference (every test's sphere, ~520 samples, under the default 12 000) runs them as written.
+TEST(Adaptive, ALargeTargetRunsItsSpeedsScaledByItsSampleCount) {
+  const Case c = sphere_case();
+  constexpr int kFrames = 30;
+  control::AdaptiveParams scaled;
+  scaled.speed_reference = static_cast<float>(c.set.size()) / 8.0f;
+  control::AdaptiveParams hand, off;
+  hand.speed_reference = off.speed_reference = 0.0f;
+  hand.clamp *= 2.0f, hand.max_speed *= 2.0f, hand.gather_speed *= 2.0f;
+  const auto a = simulate(c, "adaptive", kFrames, scaled), b = simulate(c, "adaptive", kFrames, hand);
+  const auto d = simulate(c, "adaptive", kFrames), o = simulate(c, "adaptive", kFrames, off);
+  ASSERT_EQ(a.x.size(), b.x.size());
+  for (std::size_t i = 0; i < a.x.size(); ++i) ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;
+  for (std::size_t i = 0; i < d.x.size(); ++i) ASSERT_EQ(d.x[i], o.x[i]) << "particle " << i;
+  std::printf("sphere after %d frames: speeds × 1 inside %.3f, controlled %zu; × 2 inside %.3f, controlled %zu\n", kFrames,
+              d.m.inside_fraction, d.m.controlled, a.m.inside_fraction, a.m.controlled);
+  EXPECT_GT(a.m.controlled, d.m.controlled) << "faster speeds fill the target sooner";
+}
+
 TEST(Adaptive, ParametersAndRegistryRejectBadInput) {
   control::AdaptiveParams ap;
   ap.alpha = 0.0f;

@@ -351,6 +351,64 @@ TEST(GpuAdaptive, AStrengthTrackAndALateStartTrackTheCpuController) {
   for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
+// A target of 8× the reference's samples (AdaptiveParams::speed_reference) runs its speeds × 2 on both paths: one frame
+// while the column is still flowing in (the speed limit, the clamp and the gather steering all act), from a state the
+// CPU made at × 2, tracks the CPU controller, and differs from the frame at × 1 far more than the paths do.
+TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
+  Scene s;
+  s.params.gather = true;
+  s.params.speed_reference = static_cast<float>(s.c.set.size()) / 8.0f;
+  control::AdaptiveParams as_written = s.params;
+  as_written.speed_reference = 0.0f;
+  sim::ParticleSet p = s.column();
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
+  s.use(solver);
+  constexpr int kFrames = 12;
+  {
+    auto early = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+    ASSERT_TRUE(early.has_value()) << early.error().message;
+    for (int f = 0; f < kFrames; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **early).has_value());
+  }
+  const sim::ParticleSet start = p;
+  const double t0 = kFrames / 60.0, frame = 1.0 / 60.0;
+  auto cpu_frame = [&](const control::AdaptiveParams& params) {
+    sim::ParticleSet q = start;
+    auto ctl = control::AdaptiveController::create(s.targets(), s.ctx, params);
+    EXPECT_TRUE(ctl.has_value() && solver.advance(q, t0, frame, **ctl).has_value());
+    return by_id(q, q.position);
+  };
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  auto dev = PbfDevice::create(**ctx, start.size(),
+                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
+  auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, s.params);
+  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+  (*dev)->set_controller(ctl->get());
+  ASSERT_TRUE((*dev)->advance(solver, t0, frame).has_value());
+  std::vector<Vec3f> x, v;
+  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  const auto gx = by_id(start, x), cx = cpu_frame(s.params), wx = cpu_frame(as_written);
+  std::vector<double> apart(gx.size()), scaled(gx.size());
+  for (std::size_t i = 0; i < gx.size(); ++i) {
+    apart[i] = (gx[i] - cx[i]).norm() / s.c.sp.spacing();
+    scaled[i] = (cx[i] - wx[i]).norm() / s.c.sp.spacing();
+  }
+  std::sort(apart.begin(), apart.end());
+  std::sort(scaled.begin(), scaled.end());
+  std::printf("speeds x 2, frame %d: GPU - CPU |dx|/d median %.2e, 90th %.2e, largest %.2e; x 2 - x 1 on the CPU: median "
+              "%.2e, 90th %.2e\n",
+              kFrames, apart[apart.size() / 2], apart[apart.size() * 9 / 10], apart.back(), scaled[scaled.size() / 2],
+              scaled[scaled.size() * 9 / 10]);
+  EXPECT_LT(apart[apart.size() / 2], 1e-3);
+  EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
+  EXPECT_GT(scaled[scaled.size() * 9 / 10], 10 * apart[apart.size() * 9 / 10]);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
 TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
   Scene s;
   auto ctx = Context::create({.device = -1, .validation = false});

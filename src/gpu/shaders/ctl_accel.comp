@@ -15,6 +15,7 @@ layout(std430, binding = 4) readonly buffer FTarget { uint f_target[]; };
 layout(std430, binding = 5) readonly buffer SVel { vec4 s_vel[]; };
 layout(std430, binding = 6) readonly buffer TMoving { uint t_moving[]; };  // per target: 1 when it moves
 layout(std430, binding = 7) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
+layout(std430, binding = 8) readonly buffer TSpeed { vec2 t_speed[]; };  // per target: .x scales the speed limit
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -22,7 +23,7 @@ void main() {
   const uint i = nearest[j];
   if (i == 0xFFFFFFFFu) return;
   vec3 a = accel[j].xyz;
-  const float thr = C.c2.y, vmax = C.c2.z, dt = C.c2.w;
+  const float thr = C.c2.y, vmax = C.c2.z * t_speed[f_target[j]].x, dt = C.c2.w;
   const float s = t_strength[f_target[j]];  // every part scales with the target's strength (1: as written)
   if (thr >= 0.0) {  // < 0: no boundary correction
     const vec3 nrm = s_normal[i].xyz;

@@ -17,13 +17,14 @@ layout(std430, binding = 8) readonly buffer SBond { float s_bond_r2[]; };
 layout(std430, binding = 9) readonly buffer SCoef { float s_coef[]; };
 layout(std430, binding = 10) buffer Pos { vec4 pos[]; };
 layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
+layout(std430, binding = 12) readonly buffer TSpeed { vec2 t_speed[]; };  // per target: .y scales the clamp
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
   if (j >= uint(C.grid_dims.w) || nearest[j] == 0xFFFFFFFFu) return;
   const float hc = C.c0.x, hc2 = C.c0.y;
-  const float alpha = C.c1.z, max_dx = C.c1.w;
   const uint t = f_target[j];
+  const float alpha = C.c1.z, max_dx = C.c1.w * t_speed[t].y;
   const vec3 x0 = f_x[j].xyz, xs = pos[j].xyz;
   const ivec3 cj = cell_of_index(f_cell[j]);
   vec3 d = vec3(0.0);

@@ -16,6 +16,7 @@ layout(std430, binding = 5) readonly buffer Vel { vec4 vel[]; };
 layout(std430, binding = 6) buffer Accel { vec4 accel[]; };
 layout(std430, binding = 7) readonly buffer SVel { vec4 s_vel[]; };
 layout(std430, binding = 8) readonly buffer TStrength { float t_strength[]; };  // per target, in this sub-step
+layout(std430, binding = 9) readonly buffer TSpeed { vec2 t_speed[]; };  // per target: .x scales the steering speed
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -28,12 +29,13 @@ void main() {
   const vec3 to = s_pos[s].xyz - xj;
   const float len = length(to);
   if (len <= 0.0) return;
+  const float speed = C.c0.w * t_speed[t].x;
   vec3 v_des;
   if (C.c1.w != 0.0) {  // chase: closing in at least at a share of the seed's own speed, on top of following it
     const vec3 u = s_vel[s].xyz;
-    v_des = (max(C.c0.w, C.c1.z * length(u)) / len) * to + u;
+    v_des = (max(speed, C.c1.z * length(u)) / len) * to + u;
   } else {
-    v_des = (C.c0.w / len) * to;
+    v_des = (speed / len) * to;
   }
   accel[j] += vec4(t_strength[t] * (-C.c0.xyz + C.c1.x * (v_des - vel[j].xyz)), 0.0);
 }
