@@ -447,7 +447,7 @@ void AdaptiveController::control_correction(sim::ParticleSet& p, float dt) {
   max_dx_.resize(samples_.targets());
   for (std::size_t t = 0; t < max_dx_.size(); ++t)
     max_dx_[t] = std::min(1.0f, params_.clamp * speed_scale_[t]) * d_ * std::min(1.0f, dt / kReferenceDt);
-  const CorrectionLimit limit{params_.alpha, max_dx_.data(), params_.kinematic};
+  const CorrectionLimit limit{params_.alpha, max_dx_.data(), max_dx_.size(), params_.kinematic};
   // Once a target has formed only a few (surface) samples are still under-filled: then the sum is scattered from
   // those samples, instead of every fluid particle walking its ~270 bonds to find them.
   if (active_.size() * 8 < samples_.position.size()) scatter_correction(p, limit);
@@ -517,7 +517,8 @@ void AdaptiveController::print_active_set() const {
 
 void AdaptiveController::CorrectionLimit::apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const {
   dx *= alpha;
-  const float d2 = dx.squaredNorm(), m = max_dx[p.target[j]];  // a bonded particle's target has samples
+  const std::uint8_t t = p.target[j];
+  const float d2 = dx.squaredNorm(), m = max_dx[t < targets ? t : 0];
   if (d2 > m * m) dx *= m / std::sqrt(d2);
   p.predicted[j] += dx;
   if (kinematic) p.shift[j] += dx;

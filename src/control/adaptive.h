@@ -59,6 +59,7 @@ class AdaptiveController final : public sim::Controller, public Steerable {
   struct CorrectionLimit {
     float alpha;
     const float* max_dx;  // per target
+    std::size_t targets;  // max_dx's length: a particle of no target (only with one target) takes target 0's
     bool kinematic;
     void apply(sim::ParticleSet& p, std::size_t j, Vec3f dx) const;
   };

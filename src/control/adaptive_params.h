@@ -76,9 +76,10 @@ struct AdaptiveParams {
   /// The count of control samples per target the three speeds above (clamp, max_speed, gather_speed, all in spacings
   /// per second) were set at (ours, issue 44). A target of N_t samples runs them × max(1, (N_t / this)^(1/3)): the
   /// same speeds in target sizes per second at any resolution, so a finer target forms in the same simulated time
-  /// and its fluid is not held back at a speed a 10k target needed. Measured: the 100k bunny at × 1 formed at 5.4 s
-  /// and let ~3 % go once the sub-steps grew; at its spacing ratio (× 2.15) it formed at 2.50 s and held to 25 s
-  /// (bench/RESULTS.md, "Detail at scale, sixth part"). The clamp stays at most one spacing per iteration.
+  /// and its fluid is not held back at a speed a 10k target needed. The factor is about the ratio of the spacing at
+  /// the reference count to the target's own. Measured: the 100k bunny at × 1 formed at 5.4 s and let ~3 % go once
+  /// the sub-steps grew; by this rule (× 2.03) it formed at 2.63 s, 1.35× the 10k bunny's 1.95 s, and held to 25 s
+  /// (bench/RESULTS.md, "Detail at scale, seventh part"). The clamp stays at most one spacing per iteration.
   /// [0, 1e9]; 0 = the speeds as written at every count.
   float speed_reference = 12000.0f;
 
