@@ -46,6 +46,14 @@ struct Scene {
   }
 };
 
+// |a_i − b_i| / d for every particle, in ascending order (its median and percentiles are what the tests compare).
+std::vector<double> sorted_apart(const std::vector<Vec3f>& a, const std::vector<Vec3f>& b, float d) {
+  std::vector<double> out(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) out[i] = (a[i] - b[i]).norm() / d;
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<Vec3f> by_id(const sim::ParticleSet& p, std::span<const Vec3f> v) {
   std::vector<Vec3f> out(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) out[p.id[i]] = v[i];
@@ -233,13 +241,7 @@ TEST(GpuAdaptive, AMovingTargetTracksTheCpuController) {
   std::vector<Vec3f> x, v;
   ASSERT_TRUE((*dev)->get_state(x, v).ok());
   const auto gx = by_id(start, x), cx = by_id(p, p.position), sx = by_id(start, start.position);
-  std::vector<double> dx(gx.size()), moved(gx.size());
-  for (std::size_t i = 0; i < gx.size(); ++i) {
-    dx[i] = (gx[i] - cx[i]).norm() / s.c.sp.spacing();
-    moved[i] = (cx[i] - sx[i]).norm() / s.c.sp.spacing();
-  }
-  std::sort(dx.begin(), dx.end());
-  std::sort(moved.begin(), moved.end());
+  const auto dx = sorted_apart(gx, cx, s.c.sp.spacing()), moved = sorted_apart(cx, sx, s.c.sp.spacing());
   std::vector<Index> bound;
   ASSERT_TRUE((*ctl)->get_bound(bound).ok());
   std::size_t same = 0, held = 0;
@@ -392,13 +394,7 @@ TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
   std::vector<Vec3f> x, v;
   ASSERT_TRUE((*dev)->get_state(x, v).ok());
   const auto gx = by_id(start, x), cx = cpu_frame(s.params), wx = cpu_frame(as_written);
-  std::vector<double> apart(gx.size()), scaled(gx.size());
-  for (std::size_t i = 0; i < gx.size(); ++i) {
-    apart[i] = (gx[i] - cx[i]).norm() / s.c.sp.spacing();
-    scaled[i] = (cx[i] - wx[i]).norm() / s.c.sp.spacing();
-  }
-  std::sort(apart.begin(), apart.end());
-  std::sort(scaled.begin(), scaled.end());
+  const auto apart = sorted_apart(gx, cx, s.c.sp.spacing()), scaled = sorted_apart(cx, wx, s.c.sp.spacing());
   std::printf("speeds x 2, frame %d: GPU - CPU |dx|/d median %.2e, 90th %.2e, largest %.2e; x 2 - x 1 on the CPU: median "
               "%.2e, 90th %.2e\n",
               kFrames, apart[apart.size() / 2], apart[apart.size() * 9 / 10], apart.back(), scaled[scaled.size() / 2],
