@@ -32,6 +32,12 @@ class ControlSamples {
   /// The samples at `time`: a target whose mesh swaps at this time takes its next sample set (true is returned:
   /// indices of the previous set are then invalid), moving targets are posed, and with velocities, u_c over `dt`.
   bool update(double time, float dt);
+  /// Whether update(time) would take some target's next sample set (a device run ends its submission there).
+  bool swaps_by(double time) const {
+    for (std::size_t t = 0; t < phases_.size(); ++t)
+      if (current_[t] + 1 < phases_[t].size() && time >= phases_[t][current_[t] + 1].time) return true;
+    return false;
+  }
   /// Target `t` holds `pose` from the next update() on (live steering), replacing its keyframes.
   void set_target_pose(std::size_t t, const pose::Pose& pose);
 

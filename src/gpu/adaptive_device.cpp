@@ -20,7 +20,7 @@ struct AdaptiveDevice::Constants {
   float c0[4];  // H_c, H_c², Poly6 k at H_c, Spiky kgrad at H_c
   float c1[4];  // m_p, ε_c, α, the largest |Δx| per iteration
   float c2[4];  // γ (scaled to Δt), |n| threshold (< 0: no boundary correction), speed limit, Δt
-  std::int32_t c3[4];  // samples, reach, bond radius rule, several targets
+  std::int32_t c3[4];  // samples, reach, bond radius rule, flags (several targets 1, kinematic 2)
   float field_lo[4];           // the seed field: corner, 1 / cell
   std::int32_t field_dims[4];  // cells per axis, targets
 };
@@ -37,27 +37,17 @@ std::vector<float> packed(std::span<const Vec3f> v) {
   return out;
 }
 
-// What the device does not do yet, as the one-line error of create(); empty when it does all the scene asks.
-std::string unsupported(const std::vector<control::ControlTarget>& targets, const control::AdaptiveParams& params) {
-  if (params.kinematic) return "kinematic corrections (controller.adaptive.kinematic)";
-  for (std::size_t t = 0; t < targets.size(); ++t) {
-    const control::ControlTarget& c = targets[t];
-    if (!c.swaps.empty()) return fmt::format("a morphing target (target {})", t);
-  }
-  return {};
-}
-
 }  // namespace
 
 Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid, std::vector<control::ControlTarget> targets,
                                                               const control::ControlContext& ctx,
                                                               const control::AdaptiveParams& params) {
   FF_CHECK(params.validate());
-  if (const std::string what = unsupported(targets, params); !what.empty())
-    return param_error("the GPU controller does not do " + what + " yet; run it with --device cpu");
   std::unique_ptr<AdaptiveDevice> a(new AdaptiveDevice());
   a->timed_ = std::any_of(targets.begin(), targets.end(),
                           [](const control::ControlTarget& t) { return t.start > 0.0 || !t.strength.keys.empty(); });
+  a->morphs_ = std::any_of(targets.begin(), targets.end(),
+                           [](const control::ControlTarget& t) { return !t.swaps.empty(); });
   control::ControlSamples& samples = a->samples_;
   FF_CHECK(samples.init(std::move(targets), "adaptive (GPU)",
                         {.cell_order = false, .weights = params.weights, .normals = true, .velocities = true}));
@@ -65,48 +55,69 @@ Result<std::unique_ptr<AdaptiveDevice>> AdaptiveDevice::create(PbfDevice& fluid,
   a->fluid_ = &fluid;
   a->params_ = params;
   a->ctx_ = ctx;
-  a->m_ = samples.size();
   a->hc_ = samples.hc;
-  a->g_ref_ = samples.g_ref;
   a->multi_ = samples.targets() > 1;
-  a->original_ = samples.original;
   // ε_c as the CPU controller takes it (AdaptiveController::create): epsilon · S_0 of a full neighbourhood at H_c.
   const float d = ctx.spacing();
   const double rho_ref = sampling::lattice_density(d, a->hc_, ctx.rest_density);
   a->eps_c_ = static_cast<float>(params.epsilon * control::full_gradient_sum(d, a->hc_, ctx.particle_mass, rho_ref));
 
   FF_CHECK(a->make_buffers());
-  Context& c = fluid.context();
-  const DeviceBuffer &fx = fluid.x_buffer(), &fpos = fluid.predicted_buffer(), &fcell = fluid.cell_buffer(),
-                     &fstart = fluid.start_buffer(), &fitems = fluid.items_buffer();
-  const PbfDevice::PointGrid& sg = a->s_grid_;
-  FF_TRY(a->fill_k_, Kernel::create(c, "ctl_fill", shaders::ctl_fill(),
-                                    {&a->s_pos_, &sg.cell, &a->s_rho_c_, &a->s_target_, &fx, &fstart, &fitems, &a->f_target_,
-                                     &a->s_fill_, &a->s_bond_r2_, &a->t_strength_}));
-  FF_TRY(a->bonds_k_, Kernel::create(c, "ctl_bonds", shaders::ctl_bonds(),
-                                     {&fx, &fcell, &a->f_target_, &a->s_pos_, &sg.start, &sg.items, &a->s_target_,
-                                      &a->s_bond_r2_, &a->nearest_}));
-  FF_TRY(a->accel_k_, Kernel::create(c, "ctl_accel", shaders::ctl_accel(),
-                                     {&a->nearest_, &a->s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer(),
-                                      &a->f_target_, &a->s_vel_, &a->t_moving_, &a->t_strength_, &a->t_speed_}));
-  FF_TRY(a->spring_k_, Kernel::create(c, "ctl_spring", shaders::ctl_spring(),
-                                      {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                       &a->s_target_, &a->s_bond_r2_, &a->s_fill_, &fpos, &a->s_vel_, &a->t_strength_}));
-  FF_TRY(a->lambda_k_, Kernel::create(c, "ctl_lambda", shaders::ctl_lambda(),
-                                      {&a->s_pos_, &sg.cell, &a->s_rho_c_, &a->s_target_, &a->s_phi_, &fx, &fpos, &fstart,
-                                       &fitems, &a->f_target_, &a->s_coef_, &a->s_vel_, &a->t_strength_}));
-  FF_TRY(a->correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
-                                       {&fx, &fcell, &a->f_target_, &a->nearest_, &a->s_pos_, &sg.start, &sg.items,
-                                        &a->s_target_, &a->s_bond_r2_, &a->s_coef_, &fpos, &a->s_vel_, &a->t_speed_}));
-  if (params.gather) FF_CHECK(a->make_seed_field(samples.targets()));
+  FF_CHECK(a->make_kernels());
   return a;
 }
 
-// The samples' buffers and the fluid's per-particle ones, filled from samples_ (the fluid's targets: 0 until
-// set_fluid_targets), and the samples sorted into the fluid grid's cells.
+// The passes, bound to the fluid's buffers and the samples' current ones (again after a morph's swap).
+Status AdaptiveDevice::make_kernels() {
+  Context& c = fluid_->context();
+  const PbfDevice& fluid = *fluid_;
+  const DeviceBuffer &fx = fluid.x_buffer(), &fpos = fluid.predicted_buffer(), &fcell = fluid.cell_buffer(),
+                     &fstart = fluid.start_buffer(), &fitems = fluid.items_buffer();
+  const PbfDevice::PointGrid& sg = s_grid_;
+  FF_TRY(fill_k_, Kernel::create(c, "ctl_fill", shaders::ctl_fill(),
+                                 {&s_pos_, &sg.cell, &s_rho_c_, &s_target_, &fx, &fstart, &fitems, &f_target_, &s_fill_,
+                                  &s_bond_r2_, &t_strength_}));
+  FF_TRY(bonds_k_, Kernel::create(c, "ctl_bonds", shaders::ctl_bonds(),
+                                  {&fx, &fcell, &f_target_, &s_pos_, &sg.start, &sg.items, &s_target_, &s_bond_r2_,
+                                   &nearest_}));
+  FF_TRY(accel_k_, Kernel::create(c, "ctl_accel", shaders::ctl_accel(),
+                                  {&nearest_, &s_normal_, &fluid.velocity_buffer(), &fluid.acceleration_buffer(),
+                                   &f_target_, &s_vel_, &t_moving_, &t_strength_, &t_speed_}));
+  FF_TRY(spring_k_, Kernel::create(c, "ctl_spring", shaders::ctl_spring(),
+                                   {&fx, &fcell, &f_target_, &nearest_, &s_pos_, &sg.start, &sg.items, &s_target_,
+                                    &s_bond_r2_, &s_fill_, &fpos, &s_vel_, &t_strength_, &fluid.shift_buffer()}));
+  FF_TRY(lambda_k_, Kernel::create(c, "ctl_lambda", shaders::ctl_lambda(),
+                                   {&s_pos_, &sg.cell, &s_rho_c_, &s_target_, &s_phi_, &fx, &fpos, &fstart, &fitems,
+                                    &f_target_, &s_coef_, &s_vel_, &t_strength_}));
+  FF_TRY(correct_k_, Kernel::create(c, "ctl_correct", shaders::ctl_correct(),
+                                    {&fx, &fcell, &f_target_, &nearest_, &s_pos_, &sg.start, &sg.items, &s_target_,
+                                     &s_bond_r2_, &s_coef_, &fpos, &s_vel_, &t_speed_, &fluid.shift_buffer()}));
+  if (params_.gather) FF_CHECK(make_seed_field(samples_.targets()));
+  return {};
+}
+
+// The fluid's per-particle buffers (its targets: 0 until set_fluid_targets) and the per-target ones, then the samples'.
 Status AdaptiveDevice::make_buffers() {
   Context& c = fluid_->context();
-  const std::size_t m = m_, n = fluid_->size();
+  const std::size_t n = fluid_->size();
+  FF_TRY(f_target_, DeviceBuffer::create(c, n * 4));
+  FF_TRY(nearest_, DeviceBuffer::create(c, n * 4));
+  const std::vector<std::uint32_t> zero(n, 0);
+  FF_CHECK(f_target_.upload(zero.data(), n * 4));
+  FF_TRY(t_moving_, DeviceBuffer::create(c, samples_.targets() * 4));
+  FF_TRY(t_strength_, DeviceBuffer::create(c, samples_.targets() * 4));
+  const std::vector<float> full(samples_.targets(), 1.0f);  // a timed scene's are copied in every sub-step
+  FF_CHECK(t_strength_.upload(full.data(), full.size() * 4));
+  return make_sample_buffers();
+}
+
+// The samples' buffers, filled from samples_' current sets, and the samples sorted into the fluid grid's cells.
+Status AdaptiveDevice::make_sample_buffers() {
+  Context& c = fluid_->context();
+  m_ = samples_.size();
+  g_ref_ = samples_.g_ref;
+  original_ = samples_.original;
+  const std::size_t m = m_;
   FF_TRY(s_pos_, DeviceBuffer::create(c, m * 16));
   FF_TRY(s_normal_, DeviceBuffer::create(c, m * 16));
   FF_TRY(s_rho_c_, DeviceBuffer::create(c, m * 4));
@@ -115,13 +126,7 @@ Status AdaptiveDevice::make_buffers() {
   FF_TRY(s_fill_, DeviceBuffer::create(c, m * 4));
   FF_TRY(s_bond_r2_, DeviceBuffer::create(c, m * 4));
   FF_TRY(s_coef_, DeviceBuffer::create(c, m * 4));
-  FF_TRY(f_target_, DeviceBuffer::create(c, n * 4));
-  FF_TRY(nearest_, DeviceBuffer::create(c, n * 4));
   FF_TRY(s_vel_, DeviceBuffer::create(c, m * 16));
-  FF_TRY(t_moving_, DeviceBuffer::create(c, samples_.targets() * 4));
-  FF_TRY(t_strength_, DeviceBuffer::create(c, samples_.targets() * 4));
-  const std::vector<float> full(samples_.targets(), 1.0f);  // a timed scene's are copied in every sub-step
-  FF_CHECK(t_strength_.upload(full.data(), full.size() * 4));
   // The speeds' factors as the CPU controller's (AdaptiveController::speed_scale_, max_dx_).
   const std::vector<float> scale = control::speed_scales(samples_.target, samples_.targets(), params_.speed_reference);
   std::vector<float> speed(2 * scale.size());
@@ -138,8 +143,6 @@ Status AdaptiveDevice::make_buffers() {
   FF_CHECK(s_rho_c_.upload(samples_.rho_c.data(), m * 4));
   FF_CHECK(s_phi_.upload(samples_.phi.data(), m * 4));
   FF_CHECK(s_target_.upload(target.data(), m * 4));
-  const std::vector<std::uint32_t> zero(n, 0);
-  FF_CHECK(f_target_.upload(zero.data(), n * 4));
   FF_CHECK(upload_moving());
   FF_TRY(s_grid_, fluid_->sort_into_grid(s_pos_, m));
   return {};
@@ -160,6 +163,7 @@ Status AdaptiveDevice::make_seed_field(std::size_t targets) {
   field_.cell = cpu.cell();
   for (int a = 0; a < 3; ++a) field_.dims[static_cast<std::size_t>(a)] = cpu.dims()[a];
   targets_ = targets;
+  jumps_.clear();
   const int largest = std::max({field_.dims[0], field_.dims[1], field_.dims[2]});
   int jump = 1;
   while (jump * 2 < largest) jump *= 2;
@@ -236,7 +240,7 @@ AdaptiveDevice::Constants AdaptiveDevice::constants(float dt) const {
   k.c3[0] = static_cast<std::int32_t>(m_);
   k.c3[1] = static_cast<std::int32_t>(std::ceil(hc_ / g.cell));
   k.c3[2] = !params_.bond_breaking ? 2 : params_.bond_radius == control::BondRadius::Paper ? 1 : 0;
-  k.c3[3] = multi_ ? 1 : 0;
+  k.c3[3] = (multi_ ? 1 : 0) | (params_.kinematic ? 2 : 0);  // shaders/control.glsl's SEVERAL_TARGETS, KINEMATIC
   if (field_.cell > 0.0f) {
     k.field_lo[0] = field_.lo.x(), k.field_lo[1] = field_.lo.y(), k.field_lo[2] = field_.lo.z(), k.field_lo[3] = 1.0f / field_.cell;
     for (int a = 0; a < 3; ++a) k.field_dims[a] = field_.dims[static_cast<std::size_t>(a)];
@@ -267,12 +271,29 @@ Status AdaptiveDevice::prepare_strengths(double time, float dt, std::size_t step
   return step_strength_.upload(strength.data(), strength.size() * 4);
 }
 
-// The frame's poses of moving targets, every sub-step's, into pose_pos_ and pose_vel_ (record_begin copies one in).
-Status AdaptiveDevice::prepare_frame(double time, float dt, int substeps) {
-  if (substeps <= 0) return {};
+// A morph's swap (samples_ already hold the new sets): the samples' buffers again, and the passes bound to them. The
+// submission before has finished with the old ones (PbfDevice::advance waits for it).
+Status AdaptiveDevice::take_swap() {
+  FF_CHECK(make_sample_buffers());
+  pose_steps_ = 0;  // sized by the old sample count
+  return make_kernels();
+}
+
+// Sub-steps [from, upto) of the frame, up to the next swap: a swap at `from` is taken first; moving targets' poses at
+// each of them go into pose_pos_ and pose_vel_ (record_begin copies one in), the strengths of every sub-step of a
+// timed scene into step_strength_ at the frame's first call.
+Result<int> AdaptiveDevice::prepare_frame(double time, float dt, int from, int substeps) {
+  if (substeps <= from) return substeps;
+  const auto at = [&](int s) { return time + s * double(dt); };  // the sub-step's start, as the CPU solver's
+  if (morphs_ && samples_.swaps_by(at(from))) {
+    samples_.update(at(from), dt);
+    FF_CHECK(take_swap());
+  }
+  int upto = from + 1;
+  while (upto < substeps && !(morphs_ && samples_.swaps_by(at(upto)))) ++upto;
   const auto steps = static_cast<std::size_t>(substeps);
-  if (timed_) FF_CHECK(prepare_strengths(time, dt, steps));
-  if (!samples_.moving()) return {};
+  if (timed_ && from == 0) FF_CHECK(prepare_strengths(time, dt, steps));
+  if (!samples_.moving()) return upto;
   Context& c = fluid_->context();
   if (steps > pose_steps_) {
     FF_TRY(pose_pos_, DeviceBuffer::create(c, steps * m_ * 16));
@@ -280,20 +301,22 @@ Status AdaptiveDevice::prepare_frame(double time, float dt, int substeps) {
     FF_TRY(pose_nrm_, DeviceBuffer::create(c, steps * m_ * 16));
     pose_steps_ = steps;
   }
-  std::vector<float> pos(4 * m_ * steps, 0.0f), vel(4 * m_ * steps, 0.0f), nrm(4 * m_ * steps, 0.0f);
-  for (std::size_t s = 0; s < steps; ++s) {
+  const auto first = static_cast<std::size_t>(from), count = static_cast<std::size_t>(upto - from);
+  std::vector<float> pos(4 * m_ * count, 0.0f), vel(4 * m_ * count, 0.0f), nrm(4 * m_ * count, 0.0f);
+  for (std::size_t k = 0; k < count; ++k) {
     // As the CPU controller's begin_step: the samples at the sub-step's start time, u_c over the sub-step.
-    if (samples_.update(time + double(s) * double(dt), dt))
-      return numerical_error("adaptive (GPU): a target's samples were swapped (morph), which the GPU path does not do");
+    samples_.update(at(from + static_cast<int>(k)), dt);
     for (std::size_t i = 0; i < m_; ++i) {
-      std::memcpy(&pos[4 * (s * m_ + i)], samples_.position[i].data(), 12);
-      std::memcpy(&vel[4 * (s * m_ + i)], samples_.velocity[i].data(), 12);
-      std::memcpy(&nrm[4 * (s * m_ + i)], samples_.normal[i].data(), 12);  // the boundary normals turn too
+      std::memcpy(&pos[4 * (k * m_ + i)], samples_.position[i].data(), 12);
+      std::memcpy(&vel[4 * (k * m_ + i)], samples_.velocity[i].data(), 12);
+      std::memcpy(&nrm[4 * (k * m_ + i)], samples_.normal[i].data(), 12);  // the boundary normals turn too
     }
   }
-  FF_CHECK(pose_pos_.upload(pos.data(), pos.size() * 4));
-  FF_CHECK(pose_vel_.upload(vel.data(), vel.size() * 4));
-  return pose_nrm_.upload(nrm.data(), nrm.size() * 4);
+  const VkDeviceSize bytes = pos.size() * 4, offset = first * m_ * 16;
+  FF_CHECK(pose_pos_.upload(pos.data(), bytes, offset));
+  FF_CHECK(pose_vel_.upload(vel.data(), bytes, offset));
+  FF_CHECK(pose_nrm_.upload(nrm.data(), bytes, offset));
+  return upto;
 }
 
 // The gather passes' own reading of c0, c1 and c3.y (shaders/control.glsl).

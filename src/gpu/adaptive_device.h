@@ -22,8 +22,12 @@
 // of a frame is computed on the host by the same ControlSamples::strength (0 before the start) and copied in with the
 // pose; every part of the control scales with it, and at 0 a target has no bonds, seeds or corrections (as the CPU's).
 //
-// So far (the rest is issue 45's): targets that do not morph, without kinematic corrections. create() says which of
-// these a scene asks for.
+// Morphing targets (ControlTarget::swaps): a swap inside a frame ends the frame's submission at that sub-step
+// (prepare_frame says where); the next starts with the new sample set, its buffers made again and the passes bound to
+// them, as the CPU controller takes the new set at the same sub-step.
+//
+// Kinematic corrections (AdaptiveParams::kinematic): the spring's and the density constraint's Δx also go into the
+// fluid's shift (PbfDevice::shift_buffer), which the sub-step's update takes out of the velocity, as the CPU's.
 #include "control/adaptive_params.h"
 #include "control/control_context.h"
 #include "control/control_samples.h"
@@ -42,8 +46,7 @@ namespace ff::gpu {
 
 class AdaptiveDevice final : public DeviceController {
  public:
-  /// The controller of `targets` for the fluid of `fluid` (which must outlive it); one-line errors for what the
-  /// device does not do yet.
+  /// The controller of `targets` for the fluid of `fluid` (which must outlive it).
   static Result<std::unique_ptr<AdaptiveDevice>> create(PbfDevice& fluid, std::vector<control::ControlTarget> targets,
                                                         const control::ControlContext& ctx,
                                                         const control::AdaptiveParams& params);
@@ -63,7 +66,7 @@ class AdaptiveDevice final : public DeviceController {
   /// moving (its poses are uploaded every frame from then on). An index past the last target is ignored.
   Status set_target_pose(std::size_t t, const pose::Pose& pose);
 
-  Status prepare_frame(double time, float dt, int substeps) override;
+  Result<int> prepare_frame(double time, float dt, int from, int substeps) override;
   void record_begin(VkCommandBuffer cb, float dt, int substep) const override;
   void record_accelerations(VkCommandBuffer cb, float dt) const override;
   void record_correction(VkCommandBuffer cb, int iteration, float dt) const override;
@@ -76,6 +79,9 @@ class AdaptiveDevice final : public DeviceController {
   Constants accel_constants(float dt) const;
   Status prepare_strengths(double time, float dt, std::size_t steps);
   Status make_buffers();
+  Status make_sample_buffers();
+  Status make_kernels();
+  Status take_swap();
   Status upload_moving();
 
   PbfDevice* fluid_ = nullptr;
@@ -84,6 +90,7 @@ class AdaptiveDevice final : public DeviceController {
   control::ControlSamples samples_;
   DeviceBuffer s_vel_, t_moving_;    // u_c per sample (0 when static); per target 1 when it moves
   bool timed_ = false;               // some target starts late or has a strength track: strengths every sub-step
+  bool morphs_ = false;              // some target swaps its sample set (a morph): frames may end a submission early
   DeviceBuffer t_strength_;          // per target, its strength in this sub-step (1 throughout when not timed_)
   DeviceBuffer step_strength_;       // the frame's sub-steps' strengths, targets after targets
   // Per target (x, y): the factor of max_speed and gather_speed, and of the clamp (at most one spacing), from

@@ -110,6 +110,7 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->vel_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->check_, DeviceBuffer::create(ctx, 8));
   FF_TRY(d->accel_, DeviceBuffer::create(ctx, v4));
+  FF_TRY(d->shift_, DeviceBuffer::create(ctx, v4));
   FF_TRY(d->partial_, DeviceBuffer::create(ctx, groups(n, 256) * 4));
   FF_TRY(d->id_, DeviceBuffer::create(ctx, u));
   FF_TRY(d->st_class_, DeviceBuffer::create(ctx, u));
@@ -137,7 +138,8 @@ Result<std::unique_ptr<PbfDevice>> PbfDevice::create(Context& ctx, std::size_t n
   FF_TRY(d->force_k_, Kernel::create(ctx, "pbf_force", shaders::pbf_force(),
                                      {&d->pos_, &d->cell_, &d->start_, &d->items_, &d->vel_, &d->density_, &d->accel_}));
   FF_TRY(d->predict_k_, Kernel::create(ctx, "pbf_predict", shaders::pbf_predict(), {&d->x_, &d->vel_, &d->accel_, &d->pos_}));
-  FF_TRY(d->update_k_, Kernel::create(ctx, "pbf_update", shaders::pbf_update(), {&d->pos_, &d->x_, &d->vel_}));
+  FF_TRY(d->update_k_,
+         Kernel::create(ctx, "pbf_update", shaders::pbf_update(), {&d->pos_, &d->x_, &d->vel_, &d->shift_}));
   FF_TRY(d->check_k_, Kernel::create(ctx, "frame_check", shaders::frame_check(), {&d->x_, &d->vel_, &d->check_}));
   if (ctx.timestamp_valid_bits() > 0 && ctx.timestamp_period_ns() > 0.0f) {
     VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
@@ -279,17 +281,16 @@ struct Stamps {
 }  // namespace
 
 // What every way of stepping on the device checks and prepares first: the cells cover the support, the sub-step is
-// positive, the surface tension's points and the controller's poses are on the device; then the sweeps' constants
-// (c), the force pass's (cf) and the prediction's and update's (cs).
+// positive, the surface tension's points are on the device; then the sweeps' constants (c), the force pass's (cf) and
+// the prediction's and update's (cs). The controller prepares its sub-steps itself (prepare_frame).
 Status PbfDevice::prepare_substeps(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk,
-                                   const sim::PbfForceConsts& fk, const Sweeps& sweeps, double time, int steps,
-                                   Constants& c, Constants& cf, Constants& cs) {
+                                   const sim::PbfForceConsts& fk, const Sweeps& sweeps, Constants& c, Constants& cf,
+                                   Constants& cs) {
   if (lk.h > grid_.cell) return param_error(fmt::format("GPU PBF: h = {} is larger than the grid's cells ({})", lk.h, grid_.cell));
   if (!(fk.dt > 0.0f)) return param_error(fmt::format("GPU PBF: sub-step {} s is not positive", fk.dt));
   if (fk.st_sigma > 0.0f) FF_CHECK(prepare_points(sim::surface_tension_samples(fk.st_samples_per_second, fk.dt)));
   if (fk.vorticity > 0.0f && omega_.bytes() == 0) FF_CHECK(make_vorticity_kernels());
   lk_ = lk;
-  if (controller_) FF_CHECK(controller_->prepare_frame(time, fk.dt, steps));
   c = make_constants(grid_, n_, &lk, &dk);
   c.k3[2] = static_cast<float>(sweeps.iterations), c.k3[3] = sweeps.target;
   cf = force_constants(c, fk);
@@ -346,6 +347,7 @@ void PbfDevice::record_substep(VkCommandBuffer cb, const Constants& c, const Con
   // The grid on x, as the CPU's lists: x goes to the x* buffer, which the grid and the density pass read.
   const VkBufferCopy all{0, 0, n_ * 16};
   vkCmdCopyBuffer(cb, x_.handle(), pos_.handle(), 1, &all);
+  vkCmdFillBuffer(cb, shift_.handle(), 0, VK_WHOLE_SIZE, 0);  // as the CPU's prediction zeroes ParticleSet::shift
   compute_barrier(cb);
   record_grid(cb, &c);
   stamp(cb);
@@ -402,7 +404,9 @@ Status PbfDevice::substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaCon
                           const Sweeps& sweeps, PassTimes* times) {
   const int iterations = std::max(sweeps.iterations, sweeps.max_iterations);
   Constants c, cf, cs;
-  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, 0.0, 1, c, cf, cs));  // a lone sub-step: from time 0
+  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, c, cf, cs));
+  if (controller_)  // a lone sub-step: from time 0
+    if (Result<int> prepared = controller_->prepare_frame(0.0, fk.dt, 0, 1); !prepared) return prepared.error();
   if (times) *times = {};
   const bool timed = times && timestamps_ && iterations <= kMaxTimedIterations;
   Stamps stamp{timestamps_, timed};
@@ -589,15 +593,21 @@ Result<DeviceFrame> PbfDevice::advance(const sim::PbfSolver& solver, double time
   const sim::SolverParams& sp = solver.params();
   const Sweeps sweeps{sp.iterations, sp.max_iterations, sp.max_density_error};
   Constants c, cf, cs;
-  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, time, plan.steps, c, cf, cs));
-  // Every sub-step in one submission: the device runs the frame without waiting for the host.
-  FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
-    reset_sweeps(cb, true);
-    for (int s = 0; s < plan.steps; ++s) {
-      fk.st_key = sim::surface_tension_step_key(time + s * double(plan.dt));  // the CPU's key for this sub-step
-      record_substep(cb, c, cf, cs, fk, sweeps, s, [](VkCommandBuffer) {});
+  FF_CHECK(prepare_substeps(lk, dk, fk, sweeps, c, cf, cs));
+  // Every sub-step in one submission: the device runs the frame without waiting for the host. Only a controller whose
+  // samples change inside the frame (a morph's swap) ends one there, and the next starts from the new samples.
+  for (int from = 0, upto = plan.steps; from < plan.steps; from = upto) {
+    if (controller_) {
+      FF_TRY(upto, controller_->prepare_frame(time, plan.dt, from, plan.steps));
     }
-  }));
+    FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
+      if (from == 0) reset_sweeps(cb, true);
+      for (int s = from; s < upto; ++s) {
+        fk.st_key = sim::surface_tension_step_key(time + s * double(plan.dt));  // the CPU's key for this sub-step
+        record_substep(cb, c, cf, cs, fk, sweeps, s, [](VkCommandBuffer) {});
+      }
+    }));
+  }
   FF_TRY(const Check after, check());
   if (after.first_bad < n_) return blown(after.first_bad, plan.steps);
   struct {

@@ -66,9 +66,11 @@ struct DeviceFrame {
 class DeviceController {
  public:
   virtual ~DeviceController() = default;
-  /// Before a frame of `substeps` sub-steps of `dt` from `time` is recorded: what its sub-steps need from the host
-  /// (the poses of moving targets), uploaded at once so that the frame stays one submission.
-  virtual Status prepare_frame(double time, float dt, int substeps) = 0;
+  /// Before sub-steps `from`, `from` + 1, … of a frame of `substeps` sub-steps of `dt` from `time` are recorded: what
+  /// they need from the host (the poses of moving targets), uploaded at once so that they are one submission. Returns
+  /// the sub-step before which that submission must end (`substeps`, or where the controller's samples change: a
+  /// morph's swap); the next call then starts there.
+  virtual Result<int> prepare_frame(double time, float dt, int from, int substeps) = 0;
   /// After the grid on x (begin_step) of sub-step `substep` of the frame.
   virtual void record_begin(VkCommandBuffer cb, float dt, int substep) const = 0;
   /// After the forces, before the prediction: the accelerations buffer may be changed (add_accelerations).
@@ -155,6 +157,8 @@ class PbfDevice {
   const DeviceBuffer& predicted_buffer() const { return pos_; }
   const DeviceBuffer& velocity_buffer() const { return vel_; }
   const DeviceBuffer& acceleration_buffer() const { return accel_; }
+  /// The part of x* − x that is not to become velocity (sim::ParticleSet::shift): 0 at each sub-step's start.
+  const DeviceBuffer& shift_buffer() const { return shift_; }
   const DeviceBuffer& cell_buffer() const { return cell_; }
   const DeviceBuffer& start_buffer() const { return start_; }
   const DeviceBuffer& items_buffer() const { return items_; }
@@ -183,12 +187,12 @@ class PbfDevice {
   Status read_times(int iterations, bool with_force, PassTimes& times) const;
   void reset_sweeps(VkCommandBuffer cb, bool frame) const;
   Status prepare_substeps(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
-                          const Sweeps& sweeps, double time, int steps, Constants& c, Constants& cf, Constants& cs);
+                          const Sweeps& sweeps, Constants& c, Constants& cf, Constants& cs);
 
   Context* ctx_ = nullptr;
   std::size_t n_ = 0;
   GridSpec grid_;
-  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_, accel_;
+  DeviceBuffer pos_, next_, cell_, count_, start_, items_, density_, lambda_, x_, vel_, check_, accel_, shift_;
   DeviceBuffer partial_, state_;  // the density error's per-workgroup sums; the sweeps' state (density_decide.comp)
   // Surface tension: the particles' ids (their random rotations), the point set, each particle's class, n̂, κ.
   DeviceBuffer id_, points_, st_class_, st_normal_, st_curv_;

@@ -440,7 +440,7 @@ Result<CompareTable> run_compare(const CompareOptions& o) {
   for (const auto* e : entries) {  // --device gpu with a controller the GPU path does not have: one line, up front
     control::ControllerSpec spec = scene.controller;
     spec.name = std::string(e->name);
-    FF_CHECK(check_device(device, spec, scene.targets));
+    FF_CHECK(check_device(device, spec));
   }
   if (scene.targets.empty())
     return input_error(fmt::format("{}: the scene has no targets, so there is no shape to compare controllers on",

@@ -26,7 +26,7 @@ Result<std::unique_ptr<LiveScene>> LiveScene::create(const scene::Scene& scene_i
   FF_CHECK(s->scene_.controller.validate());
   if (s->scene_.targets.empty()) return input_error("serve: the scene has no targets to form");
   FF_TRY(s->device_, parse_device(options.device));
-  FF_CHECK(check_device(s->device_, s->scene_.controller, s->scene_.targets));
+  FF_CHECK(check_device(s->device_, s->scene_.controller));
   if (s->device_ == Device::Auto && !auto_finds_gpu()) {  // decided once, not at every restart or switch
     spdlog::info("--device auto: no discrete or integrated GPU, running on the CPU");
     s->device_ = Device::Cpu;

@@ -544,7 +544,7 @@ Result<Device> run_device(const scene::Scene& scene, bool has_targets, const std
   FF_TRY(const Device device, parse_device(name));
   control::ControllerSpec spec = scene.controller;
   if (!has_targets) spec.name = "none";
-  FF_CHECK(check_device(device, spec, scene.targets));
+  FF_CHECK(check_device(device, spec));
   return device;
 }
 

@@ -122,13 +122,9 @@ bool auto_finds_gpu() {
   return index && *index >= 0;
 }
 
-Status check_device(Device device, const control::ControllerSpec& spec, std::span<const scene::TargetSpec> targets) {
+Status check_device(Device device, const control::ControllerSpec& spec) {
   if (device != Device::Gpu) return {};
   std::string gap = gpu_gap(spec);
-  for (std::size_t t = 0; t < targets.size() && gap.empty() && spec.name == "adaptive"; ++t) {
-    if (spec.get<control::AdaptiveParams>().kinematic) gap = "kinematic corrections (controller.adaptive.kinematic)";
-    else if (!targets[t].swaps.empty()) gap = fmt::format("a morphing target (targets[{}].morph)", t);
-  }
   if (!gap.empty()) return param_error("--device gpu: the GPU path does not do " + gap + " yet; use --device cpu");
   return {};
 }

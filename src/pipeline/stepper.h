@@ -7,13 +7,11 @@
 #include "control/registry.h"
 #include "core/error.h"
 #include "pose/target_motion.h"
-#include "scene/scene.h"
 #include "sim/controller.h"
 #include "sim/particle_set.h"
 #include "sim/pbf_solver.h"
 
 #include <memory>
-#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,9 +23,8 @@ enum class Device { Cpu, Gpu, Auto };
 Result<Device> parse_device(std::string_view name, std::string_view option = "--device");
 
 /// For --device gpu: an Error naming what of the scene the GPU path does not do yet (checked before the run starts
-/// anything); ok for the CPU and auto. `targets`: the scene's (their morphs).
-Status check_device(Device device, const control::ControllerSpec& spec,
-                    std::span<const scene::TargetSpec> targets = {});
+/// anything); ok for the CPU and auto.
+Status check_device(Device device, const control::ControllerSpec& spec);
 
 class FrameStepper {
  public:

@@ -1,6 +1,6 @@
 // `fluidform run --device gpu|auto` end to end on the machine's Vulkan device (lavapipe in CI): a small forming scene
 // gives the CPU's quality figures, two runs give the same frames, a checkpoint resumes to the same last frame, what
-// the GPU path does not do yet is a one-line error, and auto never picks lavapipe.
+// the GPU path does not do (a baseline controller) is a one-line error, and auto never picks lavapipe.
 #include "e2e/cli_support.h"
 #include "support/test_support.h"
 
@@ -130,17 +130,42 @@ TEST(GpuRun, ADeviceLostOutOfMemoryOrABadShaderIsOneLineAndTheRunResumes) {
   one_line(r, "FF_GPU_FAULT");
 }
 
+// A morph (targets[].morph): the sphere swaps to a box of about its volume a third into the run; the device run takes
+// the box's samples at the swap's sub-step and ends with the CPU's figures against the box.
+TEST(GpuRun, AMorphRunsOnTheDeviceAsOnTheCpu) {
+  const auto dir = test::temp_dir("gpu_morph");
+  test::write_obj(dir / "sphere.obj", test::sphere_mesh(0.25f, 3));
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.2f, -0.2f, -0.2f), Vec3f(0.2f, 0.2f, 0.2f)));
+  const fs::path scene = write_scene(dir, R"({
+    "targets": [{"mesh": "sphere.obj", "morph": [{"time": 0.1, "mesh": "box.obj"}]}],
+    "sampling": {"auto_count": 1500},
+    "output": {"frames": 30}
+  })");
+  const auto gpu = run({"-q", "run", scene.string(), "-o", (dir / "gpu").string(), "--device", "gpu", "--no-mesh"});
+  ASSERT_EQ(gpu.code, 0) << gpu.err;
+  const auto cpu = run({"-q", "run", scene.string(), "-o", (dir / "cpu").string(), "--device", "cpu", "--no-mesh"});
+  ASSERT_EQ(cpu.code, 0) << cpu.err;
+  const json g = report(dir / "gpu"), c = report(dir / "cpu");
+  const json &gt = g["totals"], &ct = c["totals"];
+  std::printf("morph on the device: E %.3f %% vs CPU %.3f %%, inside %.2f %% vs %.2f %%\n",
+              gt["error_rate_pct"].get<double>(), ct["error_rate_pct"].get<double>(),
+              100 * gt["inside_fraction"].get<double>(), 100 * ct["inside_fraction"].get<double>());
+  EXPECT_NEAR(gt["error_rate_pct"].get<double>(), ct["error_rate_pct"].get<double>(),
+              0.1 * ct["error_rate_pct"].get<double>());
+  EXPECT_NEAR(gt["inside_fraction"].get<double>(), ct["inside_fraction"].get<double>(), 0.02);
+}
+
 TEST(GpuRun, WhatTheGpuDoesNotDoYetIsAOneLineErrorAndAutoFallsBack) {
   const auto dir = test::temp_dir("gpu_gaps");
   test::write_obj(dir / "sphere.obj", test::sphere_mesh(0.25f, 3));
   const fs::path scene = write_scene(dir, R"({
     "targets": [{"mesh": "sphere.obj"}],
     "sampling": {"auto_count": 1500},
-    "controller": {"adaptive": {"kinematic": true}}
-  })");  // not on the device yet
+    "controller": {"name": "pbfc"}
+  })");  // the baselines stay on the CPU
   const auto r = run({"-q", "run", scene.string(), "-o", (dir / "out").string(), "--device", "gpu", "--frames", "2"});
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("does not do kinematic corrections"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not do the controller 'pbfc'"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out")) << "checked before anything is written";
   const auto bad = run({"run", scene.string(), "-o", (dir / "bad").string(), "--device", "tpu"});

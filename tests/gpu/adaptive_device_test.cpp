@@ -8,6 +8,8 @@
 #include "gpu/adaptive_device.h"
 #include "gpu/context.h"
 #include "gpu/pbf_device.h"
+#include "sampling/samplers.h"
+#include "support/shapes.h"
 
 #include <gtest/gtest.h>
 
@@ -405,24 +407,143 @@ TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
   for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
-TEST(GpuAdaptive, WhatTheDeviceDoesNotDoYetIsAOneLineError) {
+// A morph (ControlTarget::swaps): the sphere, formed on the CPU, swaps to a flat slab of about its volume a third into
+// a frame. Three frames from the same state on both paths, with the gather steering: the device ends the frame's first
+// submission at the swap's sub-step and takes the slab's samples there, as the CPU controller does; the frames track
+// the CPU's, and the swap moves them far more than the paths differ.
+TEST(GpuAdaptive, AMorphTracksTheCpuController) {
   Scene s;
-  auto ctx = Context::create({.device = -1, .validation = false});
-  ASSERT_TRUE(ctx.has_value());
-  const sim::PbfSolver solver(s.c.sp, s.c.dom);
+  s.params.gather = true;
+  sampling::SamplingParams smp;
+  smp.spacing = s.c.sp.spacing();
+  smp.method = sampling::Method::Voxel;
+  auto slab = sampling::sample_target(test::translate(test::box(Vec3f(0.32f, 0.08f, 0.32f)), Vec3f(0.0f, 0.45f, 0.0f)),
+                                      smp);
+  ASSERT_TRUE(slab.has_value()) << slab.error().message;
+  sim::ParticleSet p = s.column();
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
   s.use(solver);
-  auto dev = PbfDevice::create(**ctx, 100, GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
-  ASSERT_TRUE(dev.has_value());
+  {
+    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+    ASSERT_TRUE(formed.has_value()) << formed.error().message;
+    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
+  }
+  const sim::ParticleSet start = p;
+  const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
+  constexpr int kFrames = 3;
+  auto morph = s.targets();
+  morph[0].swaps.emplace_back(t0 + frame / 3, *slab);
+  auto cpu_frames = [&](const std::vector<control::ControlTarget>& targets, std::vector<Index>* bound) {
+    sim::ParticleSet q = start;
+    auto ctl = control::AdaptiveController::create(targets, s.ctx, s.params);
+    EXPECT_TRUE(ctl.has_value());
+    for (int f = 0; f < kFrames; ++f) EXPECT_TRUE(solver.advance(q, t0 + f * frame, frame, **ctl).has_value());
+    if (bound) {
+      bound->assign(q.size(), kInvalidIndex);
+      for (std::size_t i = 0; i < q.size(); ++i) (*bound)[q.id[i]] = q.bound_control[i];
+    }
+    return by_id(q, q.position);
+  };
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  auto dev = PbfDevice::create(**ctx, start.size(),
+                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
+  auto ctl = AdaptiveDevice::create(**dev, morph, s.ctx, s.params);
+  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+  EXPECT_EQ((*ctl)->samples(), s.c.set.size());
+  (*dev)->set_controller(ctl->get());
+  int first_substeps = 0;
+  for (int f = 0; f < kFrames; ++f) {
+    auto done = (*dev)->advance(solver, t0 + f * frame, frame);
+    ASSERT_TRUE(done.has_value()) << done.error().message;
+    if (f == 0) first_substeps = done->substeps;
+  }
+  EXPECT_GE(first_substeps, 2);  // so the swap falls inside the first frame, after its first sub-step
+  EXPECT_EQ((*ctl)->samples(), slab->size());
+  std::vector<Vec3f> x, v;
+  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  std::vector<Index> cpu_bound, gpu_bound, bound;
+  const auto gx = by_id(start, x), cx = cpu_frames(morph, &cpu_bound), sx = cpu_frames(s.targets(), nullptr);
+  ASSERT_TRUE((*ctl)->get_bound(bound).ok());
+  gpu_bound.assign(bound.size(), kInvalidIndex);
+  for (std::size_t i = 0; i < bound.size(); ++i) gpu_bound[start.id[i]] = bound[i];
+  const auto apart = sorted_apart(gx, cx, s.c.sp.spacing()), morphed = sorted_apart(cx, sx, s.c.sp.spacing());
+  std::size_t same = 0, held = 0;
+  for (std::size_t i = 0; i < gpu_bound.size(); ++i)
+    same += gpu_bound[i] == cpu_bound[i], held += cpu_bound[i] != kInvalidIndex;
+  std::printf("morph sphere (%zu samples) -> slab (%zu) inside frame 1 of %d (%d sub-steps): GPU - CPU |dx|/d median "
+              "%.2e, 90th %.2e, largest %.2e; morphed - unmorphed on the CPU: median %.2e, 90th %.2e; %zu of %zu held, "
+              "same nearest sample %zu\n",
+              s.c.set.size(), slab->size(), kFrames, first_substeps, apart[apart.size() / 2],
+              apart[apart.size() * 9 / 10], apart.back(), morphed[morphed.size() / 2], morphed[morphed.size() * 9 / 10],
+              held, gpu_bound.size(), same);
+  EXPECT_GT(held, gpu_bound.size() / 2);
+  EXPECT_LT(apart[apart.size() / 2], 1e-3);
+  EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
+  EXPECT_GT(morphed[morphed.size() * 9 / 10], 10 * apart[apart.size() * 9 / 10]);
+  EXPECT_GE(same, gpu_bound.size() - gpu_bound.size() / 50);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+}
+
+// Kinematic corrections (AdaptiveParams::kinematic): the corrections move the fluid without becoming velocity. One
+// frame from the formed sphere on both paths with them on: positions and velocities track the CPU's, and the
+// velocities differ from the CPU frame without them far more than the paths differ.
+TEST(GpuAdaptive, KinematicCorrectionsTrackTheCpuController) {
+  Scene s;
+  s.params.gather = true;
+  sim::ParticleSet p = s.column();
+  sim::PbfSolver solver(s.c.sp, s.c.dom);
+  solver.set_cluster_kernels(true);
+  s.use(solver);
+  {
+    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+    ASSERT_TRUE(formed.has_value()) << formed.error().message;
+    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
+  }
+  const sim::ParticleSet start = p;
+  const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
   control::AdaptiveParams kinematic = s.params;
   kinematic.kinematic = true;
-  auto a = AdaptiveDevice::create(**dev, s.targets(), s.ctx, kinematic);
-  ASSERT_FALSE(a.has_value());
-  EXPECT_NE(a.error().message.find("kinematic"), std::string::npos) << a.error().message;
-  auto morph = s.targets();
-  morph[0].swaps.emplace_back(1.0, s.c.set);
-  auto b = AdaptiveDevice::create(**dev, morph, s.ctx, s.params);
-  ASSERT_FALSE(b.has_value());
-  EXPECT_NE(b.error().message.find("morphing target"), std::string::npos) << b.error().message;
+  auto cpu_frame = [&](const control::AdaptiveParams& params, std::vector<Vec3f>& v) {
+    sim::ParticleSet q = start;
+    auto ctl = control::AdaptiveController::create(s.targets(), s.ctx, params);
+    EXPECT_TRUE(ctl.has_value() && solver.advance(q, t0, frame, **ctl).has_value());
+    v = by_id(q, q.velocity);
+    return by_id(q, q.position);
+  };
+  auto ctx = Context::create({.device = -1, .validation = true});
+  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
+  auto dev = PbfDevice::create(**ctx, start.size(),
+                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  ASSERT_TRUE(dev.has_value()) << dev.error().message;
+  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
+  auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, kinematic);
+  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
+  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
+  (*dev)->set_controller(ctl->get());
+  ASSERT_TRUE((*dev)->advance(solver, t0, frame).has_value());
+  std::vector<Vec3f> x, v, cv, wv;
+  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  const auto cx = cpu_frame(kinematic, cv);
+  cpu_frame(s.params, wv);
+  // Velocities in spacings per frame, so that they compare with the positions' spacings.
+  const float per_frame = s.c.sp.spacing() / static_cast<float>(frame);
+  const auto apart = sorted_apart(by_id(start, x), cx, s.c.sp.spacing());
+  const auto v_apart = sorted_apart(by_id(start, v), cv, per_frame), v_kinematic = sorted_apart(cv, wv, per_frame);
+  std::printf("kinematic: GPU - CPU |dx|/d median %.2e, 90th %.2e; |dv| in d per frame median %.2e, 90th %.2e; "
+              "kinematic - not on the CPU: |dv| median %.2e, 90th %.2e\n",
+              apart[apart.size() / 2], apart[apart.size() * 9 / 10], v_apart[v_apart.size() / 2],
+              v_apart[v_apart.size() * 9 / 10], v_kinematic[v_kinematic.size() / 2],
+              v_kinematic[v_kinematic.size() * 9 / 10]);
+  EXPECT_LT(apart[apart.size() / 2], 1e-3);
+  EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
+  EXPECT_LT(v_apart[v_apart.size() * 9 / 10], 1e-2);
+  EXPECT_GT(v_kinematic[v_kinematic.size() * 9 / 10], 10 * v_apart[v_apart.size() * 9 / 10]);
+  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
 }  // namespace

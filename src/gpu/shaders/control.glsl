@@ -8,7 +8,7 @@ layout(push_constant) uniform ControlConstants {
   vec4 c1;          // m_p, ε_c, α, the largest |Δx| per iteration
   vec4 c2;          // γ of the spring (scaled to Δt), |n| threshold of the boundary correction, speed limit, Δt
   ivec4 c3;         // samples m, reach in cells (⌈H_c / cell⌉), bond radius rule (0 over-full, 1 paper, 2 none),
-                    // 1 when there are several targets
+                    // flags: SEVERAL_TARGETS, KINEMATIC (below)
   vec4 field_lo;    // the seed field's grid (the gather steering): xyz its corner, w 1 / its cell edge
   ivec4 field_dims; // xyz its cells per axis, w the number of targets
 } C;
@@ -16,6 +16,9 @@ layout(push_constant) uniform ControlConstants {
 // speed (m/s), c1 = x: 1 / the steering time constant, y: the fill below which a sample is a seed; c3.y = the jump of
 // a flood pass.
 #include "common.glsl"
+// c3.w's flags: several targets (a particle bonds only to its own target's samples); kinematic corrections (the
+// spring's and the density constraint's Δx also go into the fluid's shift, so they do not become velocity).
+const int SEVERAL_TARGETS = 1, KINEMATIC = 2;
 
 
 // The seed field: cell of a position (clamped) and the centre of a cell.

@@ -27,7 +27,8 @@ void main() {
   FOR_CELLS_AROUND(cj, C.c3.y, c)
     for (uint k = s_start[c]; k < s_start[c + 1u]; ++k) {
       const uint i = s_items[k];
-      if (C.c3.w != 0 && s_target[i] != t) continue;  // one target: every fluid particle is its (as the CPU)
+      // One target: every fluid particle is its (as the CPU).
+      if ((C.c3.w & SEVERAL_TARGETS) != 0 && s_target[i] != t) continue;
       const vec3 r = s_pos[i].xyz - xj;
       const float r2 = dot(r, r);
       if (r2 > s_bond_r2[i] || r2 >= C.c0.y) continue;  // within H_c*,i, and a pair (< H_c)

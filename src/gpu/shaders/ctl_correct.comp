@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // Adaptive control, every sweep, per controlled particle j (control/adaptive.cpp, gather_correction; eq. 10, METHOD
 // §a.3): Δx_j = α Σ_{i ∈ B(j)} coef_i (H_c − |r|)² r / |r|, r = x_ci − x*_j, clamped to the largest step, into x*_j.
-// Reads and writes only its own x*.
+// Reads and writes only its own x* (and shift).
 layout(local_size_x = 128) in;
 #include "control.glsl"
 layout(std430, binding = 0) readonly buffer FX { vec4 f_x[]; };
@@ -18,6 +18,7 @@ layout(std430, binding = 9) readonly buffer SCoef { float s_coef[]; };
 layout(std430, binding = 10) buffer Pos { vec4 pos[]; };
 layout(std430, binding = 11) readonly buffer SVel { vec4 s_vel[]; };  // u_c: 0 on a static target
 layout(std430, binding = 12) readonly buffer TSpeed { vec2 t_speed[]; };  // per target: .y scales the clamp
+layout(std430, binding = 13) buffer Shift { vec4 shift[]; };  // the fluid's: written only with KINEMATIC
 
 void main() {
   const uint j = gl_GlobalInvocationID.x;
@@ -32,7 +33,7 @@ void main() {
     for (uint k = s_start[c]; k < s_start[c + 1u]; ++k) {
       const uint i = s_items[k];
       const float coef = s_coef[i];
-      if (!(coef > 0.0) || (C.c3.w != 0 && s_target[i] != t)) continue;
+      if (!(coef > 0.0) || ((C.c3.w & SEVERAL_TARGETS) != 0 && s_target[i] != t)) continue;
       const vec3 xc = s_pos[i].xyz;
       const vec3 b = xc - x0;
       if (dot(b, b) > s_bond_r2[i] || dot(b, b) >= hc2) continue;  // bonded at the start of the sub-step
@@ -49,5 +50,6 @@ void main() {
     const float d2 = dot(d, d);
     if (d2 > max_dx * max_dx) d *= max_dx / sqrt(d2);
     pos[j] = vec4(xs + d, 0.0);
+    if ((C.c3.w & KINEMATIC) != 0) shift[j] = vec4(shift[j].xyz + d, 0.0);
   }
 }

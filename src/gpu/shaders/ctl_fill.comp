@@ -32,7 +32,7 @@ void main() {
   FOR_CELLS_AROUND(ci, C.c3.y, c)
     for (uint k = f_start[c]; k < f_start[c + 1u]; ++k) {
       const uint j = f_items[k];
-      if (C.c3.w != 0 && f_target[j] != t) continue;
+      if ((C.c3.w & SEVERAL_TARGETS) != 0 && f_target[j] != t) continue;
       const vec3 r = xc - f_x[j].xyz;
       const float r2 = dot(r, r);
       if (r2 >= hc2) continue;

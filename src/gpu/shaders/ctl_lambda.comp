@@ -37,7 +37,7 @@ void main() {
   FOR_CELLS_AROUND(ci, C.c3.y, c)
     for (uint k = f_start[c]; k < f_start[c + 1u]; ++k) {
       const uint j = f_items[k];
-      if (C.c3.w != 0 && f_target[j] != t) continue;
+      if ((C.c3.w & SEVERAL_TARGETS) != 0 && f_target[j] != t) continue;
       const vec3 b = xc - f_x[j].xyz;
       if (dot(b, b) >= hc2) continue;  // the pair was not within H_c at the start (the CPU's pair list)
       const vec3 r = xe - pos[j].xyz;
