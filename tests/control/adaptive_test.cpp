@@ -170,6 +170,49 @@ TEST(Adaptive, ALargeTargetRunsItsSpeedsScaledByItsSampleCount) {
   EXPECT_GT(a.m.controlled, d.m.controlled) << "faster speeds fill the target sooner";
 }
 
+// The clamp grows with the factor only up to one spacing: at × 16 the target runs exactly as with the clamp set to 1
+// by hand (not 1.6) and the two other speeds × 16.
+TEST(Adaptive, TheScaledClampStopsAtOneSpacing) {
+  const Case c = sphere_case();
+  constexpr int kFrames = 12;
+  control::AdaptiveParams scaled;
+  scaled.speed_reference = static_cast<float>(c.set.size()) / 4096.0f;  // × 16
+  ASSERT_GT(scaled.clamp * 16.0f, 1.0f);
+  control::AdaptiveParams hand = scaled;
+  hand.speed_reference = 0.0f;
+  hand.clamp = 1.0f, hand.max_speed *= 16.0f, hand.gather_speed *= 16.0f;
+  const auto a = simulate(c, "adaptive", kFrames, scaled), b = simulate(c, "adaptive", kFrames, hand);
+  ASSERT_EQ(a.x.size(), b.x.size());
+  for (std::size_t i = 0; i < a.x.size(); ++i) ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;
+}
+
+// A morph's new sample set gets its own factor: the sphere swapped at t = 0 for the slab (432 samples, × 1.88 here)
+// runs exactly as the slab from the start, not at the sphere's × 2.
+TEST(Adaptive, AMorphsNewSamplesGetTheirOwnSpeedFactor) {
+  const Case c = sphere_case();
+  Case b = c;
+  sampling::SamplingParams smp;
+  smp.spacing = c.sp.spacing();
+  smp.method = sampling::Method::Voxel;
+  auto slab = sampling::sample_target(
+      test::translate(test::box(Vec3f(0.32f, 0.08f, 0.32f)), Vec3f(0.0f, 0.45f, 0.0f)), smp);
+  ASSERT_TRUE(slab.has_value()) << slab.error().message;
+  b.set = *slab;
+  control::AdaptiveParams ap;
+  ap.speed_reference = static_cast<float>(c.set.size()) / 8.0f;  // the sphere × 2
+  const auto scales = [&](const sampling::ControlSet& set) {
+    return control::speed_scales(std::vector<std::uint8_t>(set.size(), 0), 1, ap.speed_reference)[0];
+  };
+  ASSERT_NE(scales(c.set), scales(b.set));
+  std::printf("speed factors: sphere (%zu samples) x %.3f, slab (%zu) x %.3f\n", c.set.size(), scales(c.set),
+              b.set.size(), scales(b.set));
+  constexpr int kFrames = 12;
+  const auto morphed = simulate(c, "adaptive", kFrames, ap, {}, {{0.0, b.set}});
+  const auto direct = simulate(b, "adaptive", kFrames, ap);
+  ASSERT_EQ(morphed.x.size(), direct.x.size());
+  for (std::size_t i = 0; i < morphed.x.size(); ++i) ASSERT_EQ(morphed.x[i], direct.x[i]) << "particle " << i;
+}
+
 TEST(Adaptive, ParametersAndRegistryRejectBadInput) {
   control::AdaptiveParams ap;
   ap.alpha = 0.0f;
