@@ -287,7 +287,13 @@ Result<int> AdaptiveDevice::prepare_frame(double time, float dt, int from, int s
   const auto at = [&](int s) { return time + s * double(dt); };  // the sub-step's start, as the CPU solver's
   if (morphs_ && samples_.swaps_by(at(from))) {
     samples_.update(at(from), dt);
+    swap_pending_ = true;
+  }
+  // Until the new set's buffers and passes all exist, the swap stays pending: a frame tried again after a failure
+  // (serve steps the scene again) makes them again before anything is dispatched.
+  if (swap_pending_) {
     FF_CHECK(take_swap());
+    swap_pending_ = false;
   }
   int upto = from + 1;
   while (upto < substeps && !(morphs_ && samples_.swaps_by(at(upto)))) ++upto;

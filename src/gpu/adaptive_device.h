@@ -15,7 +15,7 @@
 //                  accelerations, unbonded fluid is steered toward its cell's seed (ctl_gather)
 //
 // Moving targets (keyframed, steered or skinned) are posed on the host by the same control::ControlSamples the CPU
-// controller uses, every sub-step of a frame at once before the frame is recorded (prepare_frame); each sub-step
+// controller uses, every sub-step of a submission at once before it is recorded (prepare_frame); each sub-step
 // copies its pose into the samples' buffers and sorts them into their grids again on the device.
 //
 // Strength tracks and late starts (control/strength.h, ControlTarget::start): each target's strength at every sub-step
@@ -91,6 +91,7 @@ class AdaptiveDevice final : public DeviceController {
   DeviceBuffer s_vel_, t_moving_;    // u_c per sample (0 when static); per target 1 when it moves
   bool timed_ = false;               // some target starts late or has a strength track: strengths every sub-step
   bool morphs_ = false;              // some target swaps its sample set (a morph): frames may end a submission early
+  bool swap_pending_ = false;        // samples_ took a new set whose buffers and passes are not all made yet
   DeviceBuffer t_strength_;          // per target, its strength in this sub-step (1 throughout when not timed_)
   DeviceBuffer step_strength_;       // the frame's sub-steps' strengths, targets after targets
   // Per target (x, y): the factor of max_speed and gather_speed, and of the clamp (at most one spacing), from

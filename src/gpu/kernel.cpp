@@ -83,8 +83,17 @@ Result<DeviceBuffer> DeviceBuffer::create(Context& ctx, VkDeviceSize bytes, bool
   return b;
 }
 
+// A copy past the buffer's end is refused before it is recorded (the driver would not: it is undefined behaviour).
+Status DeviceBuffer::check_range(VkDeviceSize bytes, VkDeviceSize offset) const {
+  if (offset > bytes_ || bytes > bytes_ - offset)
+    return param_error(
+        fmt::format("GPU: {} bytes at offset {} do not fit a buffer of {} bytes", bytes, offset, bytes_));
+  return {};
+}
+
 Status DeviceBuffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   if (bytes == 0) return {};
+  FF_CHECK(check_range(bytes, offset));
   FF_TRY(DeviceBuffer staging, create(*ctx_, bytes, true));
   std::memcpy(staging.mapped(), data, bytes);
   return ctx_->submit_and_wait([&](VkCommandBuffer cb) {
@@ -97,6 +106,7 @@ Status DeviceBuffer::upload(const void* data, VkDeviceSize bytes, VkDeviceSize o
 
 Status DeviceBuffer::download(void* data, VkDeviceSize bytes, VkDeviceSize offset) const {
   if (bytes == 0) return {};
+  FF_CHECK(check_range(bytes, offset));
   FF_TRY(DeviceBuffer staging, create(*ctx_, bytes, true));
   FF_CHECK(ctx_->submit_and_wait([&](VkCommandBuffer cb) {
     compute_barrier(cb);  // the passes' writes, before the copy reads them

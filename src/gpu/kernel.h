@@ -27,12 +27,14 @@ class DeviceBuffer {
   VkDeviceSize bytes() const { return bytes_; }
   void* mapped() const { return mapped_; }
 
-  /// Host → buffer and buffer → host, through a staging buffer (waits for the copy).
+  /// Host → buffer and buffer → host, through a staging buffer (waits for the copy); a range past the end is an
+  /// Error.
   Status upload(const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
   Status download(void* data, VkDeviceSize bytes, VkDeviceSize offset = 0) const;
 
  private:
   void release();
+  Status check_range(VkDeviceSize bytes, VkDeviceSize offset) const;
   Context* ctx_ = nullptr;
   VkBuffer buffer_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;

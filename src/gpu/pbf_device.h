@@ -104,8 +104,9 @@ class PbfDevice {
     float target = 0.0f;
   };
   /// One sub-step of the state (sim::PbfSolver::substep with the controller of set_controller(), surface tension and
-  /// vorticity when fk asks for them): the grid on x, ρ(x), the forces and x*, the sweeps, v = (x* − x)/Δt and x = x*. One
-  /// submission; waits for it.
+  /// vorticity when fk asks for them): the grid on x, ρ(x), the forces and x*, the sweeps, v = (x* − x − shift)/Δt and
+  /// x = x*. One submission; waits for it. The controller sees it as a frame of one sub-step at time 0 (a morph swaps
+  /// its samples there only if its swap time is ≤ 0): this entry point is for tests and benchmarks of the passes.
   Status substep(const sim::PbfLambdaConsts& lk, const sim::PbfDeltaConsts& dk, const sim::PbfForceConsts& fk,
                  const Sweeps& sweeps, PassTimes* times = nullptr);
   /// One output frame of `frame_dt` seconds in equal sub-steps planned as the CPU plans them (sim::plan_substeps on

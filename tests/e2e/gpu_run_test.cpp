@@ -2,6 +2,7 @@
 // gives the CPU's quality figures, two runs give the same frames, a checkpoint resumes to the same last frame, what
 // the GPU path does not do (a baseline controller) is a one-line error, and auto never picks lavapipe.
 #include "e2e/cli_support.h"
+#include "io/write_ply.h"
 #include "support/test_support.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <tuple>
 #include <utility>
 
 namespace ff {
@@ -130,29 +132,46 @@ TEST(GpuRun, ADeviceLostOutOfMemoryOrABadShaderIsOneLineAndTheRunResumes) {
   one_line(r, "FF_GPU_FAULT");
 }
 
-// A morph (targets[].morph): the sphere swaps to a box of about its volume a third into the run; the device run takes
-// the box's samples at the swap's sub-step and ends with the CPU's figures against the box.
+// A morph (targets[].morph): the sphere swaps at 0.1 s to a box of about its volume beside it (+x). The device run
+// takes the box's samples at the swap's sub-step: its fluid moves toward the box as the CPU's does (the mean x of the
+// last frame's particles), far from where the same scene without the morph leaves it, with the CPU's figures.
 TEST(GpuRun, AMorphRunsOnTheDeviceAsOnTheCpu) {
   const auto dir = test::temp_dir("gpu_morph");
   test::write_obj(dir / "sphere.obj", test::sphere_mesh(0.25f, 3));
-  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(-0.2f, -0.2f, -0.2f), Vec3f(0.2f, 0.2f, 0.2f)));
-  const fs::path scene = write_scene(dir, R"({
-    "targets": [{"mesh": "sphere.obj", "morph": [{"time": 0.1, "mesh": "box.obj"}]}],
-    "sampling": {"auto_count": 1500},
-    "output": {"frames": 30}
-  })");
-  const auto gpu = run({"-q", "run", scene.string(), "-o", (dir / "gpu").string(), "--device", "gpu", "--no-mesh"});
-  ASSERT_EQ(gpu.code, 0) << gpu.err;
-  const auto cpu = run({"-q", "run", scene.string(), "-o", (dir / "cpu").string(), "--device", "cpu", "--no-mesh"});
-  ASSERT_EQ(cpu.code, 0) << cpu.err;
+  test::write_obj(dir / "box.obj", test::box_mesh(Vec3f(0.1f, -0.2f, -0.2f), Vec3f(0.5f, 0.2f, 0.2f)));
+  const auto scene = [&](const std::string& name, const std::string& morph) {
+    return write_scene(dir, R"({
+      "targets": [{"mesh": "sphere.obj")" + morph + R"(}],
+      "sampling": {"auto_count": 1500},
+      "output": {"frames": 30}
+    })", name);
+  };
+  const fs::path morph = scene("morph.json", R"(, "morph": [{"time": 0.1, "mesh": "box.obj"}])");
+  const fs::path still = scene("still.json", "");
+  const auto mean_x = [&](const fs::path& out) {
+    auto last = io::read_particles_ply(out / "particles" / "frame_00030.ply");
+    EXPECT_TRUE(last.has_value());
+    double sum = 0;
+    for (const Vec3f& x : last->positions) sum += x.x();
+    return last->positions.empty() ? 0.0 : sum / double(last->positions.size());
+  };
+  const std::tuple<fs::path, const char*, const char*> runs[] = {
+      {morph, "gpu", "gpu"}, {morph, "cpu", "cpu"}, {still, "still", "gpu"}};
+  for (const auto& [s, out, device] : runs) {
+    const auto r = run({"-q", "run", s.string(), "-o", (dir / out).string(), "--device", device, "--no-mesh"});
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
   const json g = report(dir / "gpu"), c = report(dir / "cpu");
   const json &gt = g["totals"], &ct = c["totals"];
-  std::printf("morph on the device: E %.3f %% vs CPU %.3f %%, inside %.2f %% vs %.2f %%\n",
+  const double gx = mean_x(dir / "gpu"), cx = mean_x(dir / "cpu"), sx = mean_x(dir / "still");
+  std::printf("morph on the device: E %.3f %% vs CPU %.3f %%, inside %.2f %% vs %.2f %%; mean x %.4f m vs CPU %.4f, "
+              "without the morph %.4f\n",
               gt["error_rate_pct"].get<double>(), ct["error_rate_pct"].get<double>(),
-              100 * gt["inside_fraction"].get<double>(), 100 * ct["inside_fraction"].get<double>());
+              100 * gt["inside_fraction"].get<double>(), 100 * ct["inside_fraction"].get<double>(), gx, cx, sx);
   EXPECT_NEAR(gt["error_rate_pct"].get<double>(), ct["error_rate_pct"].get<double>(),
               0.1 * ct["error_rate_pct"].get<double>());
   EXPECT_NEAR(gt["inside_fraction"].get<double>(), ct["inside_fraction"].get<double>(), 0.02);
+  EXPECT_GT(gx - sx, 10 * std::abs(gx - cx));
 }
 
 TEST(GpuRun, WhatTheGpuDoesNotDoYetIsAOneLineErrorAndAutoFallsBack) {

@@ -28,7 +28,7 @@ struct Scene {
   Scene() {
     c.sp.surface_tension = 0.0f, c.sp.vorticity = 0.0f;  // the controller's passes alone (tested apart)
     c.sp.max_iterations = c.sp.iterations;                                    // a fixed sweep count on both
-    params.gather = false;                                                    // not on the device yet
+    params.gather = false;  // the gather steering's tests turn it on (GatherFormsTheSphereAsTheCpuDoes and on)
   }
   /// The column of fluid above the sphere, every particle of target 0.
   sim::ParticleSet column() const {
