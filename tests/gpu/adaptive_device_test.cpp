@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 namespace ff::gpu {
 namespace {
@@ -60,6 +61,38 @@ std::vector<Vec3f> by_id(const sim::ParticleSet& p, std::span<const Vec3f> v) {
   std::vector<Vec3f> out(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) out[p.id[i]] = v[i];
   return out;
+}
+
+// The column after `frames` frames of a CPU controller of `s`'s targets and parameters, from time 0: the state a test's
+// frames start from (`s.use(solver)` done); nullopt, with the failure added, when a frame fails.
+std::optional<sim::ParticleSet> cpu_state(const Scene& s, sim::PbfSolver& solver, int frames) {
+  sim::ParticleSet p = s.column();
+  auto ctl = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
+  if (!ctl) return ADD_FAILURE() << ctl.error().message, std::nullopt;
+  for (int f = 0; f < frames; ++f)
+    if (!solver.advance(p, f / 60.0, 1.0 / 60.0, **ctl)) return ADD_FAILURE() << "CPU frame " << f, std::nullopt;
+  return p;
+}
+
+// A device (validation layer on) with `start`'s fluid on it and the controller of `targets` with `params`. Members in
+// the order they must outlive each other.
+struct OnDevice {
+  std::unique_ptr<Context> ctx;
+  std::unique_ptr<PbfDevice> fluid;
+  std::unique_ptr<AdaptiveDevice> ctl;
+};
+Result<OnDevice> on_device(const Scene& s, const sim::PbfSolver& solver, const sim::ParticleSet& start,
+                           std::vector<control::ControlTarget> targets, const control::AdaptiveParams& params) {
+  OnDevice d;
+  FF_TRY(d.ctx, Context::create({.device = -1, .validation = true}));
+  FF_TRY(const GridSpec grid, GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h));
+  FF_TRY(d.fluid, PbfDevice::create(*d.ctx, start.size(), grid));
+  FF_CHECK(d.fluid->set_state(start.position, start.velocity));
+  FF_CHECK(d.fluid->set_ids(start.id));
+  FF_TRY(d.ctl, AdaptiveDevice::create(*d.fluid, std::move(targets), s.ctx, params));
+  FF_CHECK(d.ctl->set_fluid_targets(start.target));
+  d.fluid->set_controller(d.ctl.get());
+  return d;
 }
 
 TEST(GpuAdaptive, OneFrameTracksTheCpuController) {
@@ -274,16 +307,12 @@ struct TimedFrame {
 TEST(GpuAdaptive, AStrengthTrackAndALateStartTrackTheCpuController) {
   Scene s;
   s.params.gather = true;
-  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
   s.use(solver);
-  {
-    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
-    ASSERT_TRUE(formed.has_value()) << formed.error().message;
-    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
-  }
-  const sim::ParticleSet start = p;
+  const std::optional<sim::ParticleSet> formed = cpu_state(s, solver, 40);
+  ASSERT_TRUE(formed.has_value());
+  const sim::ParticleSet& start = *formed;
   const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
   auto ctx = Context::create({.device = -1, .validation = true});
   ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
@@ -364,17 +393,13 @@ TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
   s.params.speed_reference = static_cast<float>(s.c.set.size()) / 8.0f;
   control::AdaptiveParams as_written = s.params;
   as_written.speed_reference = 0.0f;
-  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
   s.use(solver);
   constexpr int kFrames = 12;
-  {
-    auto early = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
-    ASSERT_TRUE(early.has_value()) << early.error().message;
-    for (int f = 0; f < kFrames; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **early).has_value());
-  }
-  const sim::ParticleSet start = p;
+  const std::optional<sim::ParticleSet> early = cpu_state(s, solver, kFrames);
+  ASSERT_TRUE(early.has_value());
+  const sim::ParticleSet& start = *early;
   const double t0 = kFrames / 60.0, frame = 1.0 / 60.0;
   auto cpu_frame = [&](const control::AdaptiveParams& params) {
     sim::ParticleSet q = start;
@@ -382,19 +407,11 @@ TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
     EXPECT_TRUE(ctl.has_value() && solver.advance(q, t0, frame, **ctl).has_value());
     return by_id(q, q.position);
   };
-  auto ctx = Context::create({.device = -1, .validation = true});
-  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
-  auto dev = PbfDevice::create(**ctx, start.size(),
-                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  auto dev = on_device(s, solver, start, s.targets(), s.params);
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
-  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
-  auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, s.params);
-  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
-  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
-  (*dev)->set_controller(ctl->get());
-  ASSERT_TRUE((*dev)->advance(solver, t0, frame).has_value());
+  ASSERT_TRUE(dev->fluid->advance(solver, t0, frame).has_value());
   std::vector<Vec3f> x, v;
-  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  ASSERT_TRUE(dev->fluid->get_state(x, v).ok());
   const auto gx = by_id(start, x), cx = cpu_frame(s.params), wx = cpu_frame(as_written);
   const auto apart = sorted_apart(gx, cx, s.c.sp.spacing()), scaled = sorted_apart(cx, wx, s.c.sp.spacing());
   std::printf("speeds x 2, frame %d: GPU - CPU |dx|/d median %.2e, 90th %.2e, largest %.2e; x 2 - x 1 on the CPU: median "
@@ -404,7 +421,7 @@ TEST(GpuAdaptive, TheSpeedsOfALargeTargetTrackTheCpuController) {
   EXPECT_LT(apart[apart.size() / 2], 1e-3);
   EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
   EXPECT_GT(scaled[scaled.size() * 9 / 10], 10 * apart[apart.size() * 9 / 10]);
-  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+  for (const std::string& m : dev->ctx->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
 // A morph (ControlTarget::swaps): the sphere, formed on the CPU, swaps to a flat slab of about its volume a third into
@@ -424,16 +441,12 @@ TEST(GpuAdaptive, AMorphTracksTheCpuController) {
   auto slab = sampling::sample_target(test::translate(test::box(Vec3f(0.32f, 0.08f, 0.32f)), Vec3f(0.0f, 0.45f, 0.0f)),
                                       smp);
   ASSERT_TRUE(slab.has_value()) << slab.error().message;
-  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
   s.use(solver);
-  {
-    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
-    ASSERT_TRUE(formed.has_value()) << formed.error().message;
-    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
-  }
-  const sim::ParticleSet start = p;
+  const std::optional<sim::ParticleSet> formed = cpu_state(s, solver, 40);
+  ASSERT_TRUE(formed.has_value());
+  const sim::ParticleSet& start = *formed;
   const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
   auto morph = s.targets();
   morph[0].swaps.emplace_back(t0 + frame / 3, *slab);
@@ -447,26 +460,18 @@ TEST(GpuAdaptive, AMorphTracksTheCpuController) {
     }
     return by_id(q, q.position);
   };
-  auto ctx = Context::create({.device = -1, .validation = true});
-  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
-  auto dev = PbfDevice::create(**ctx, start.size(),
-                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  auto dev = on_device(s, solver, start, morph, s.params);
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
-  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
-  auto ctl = AdaptiveDevice::create(**dev, morph, s.ctx, s.params);
-  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
-  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
-  EXPECT_EQ((*ctl)->samples(), s.c.set.size());
-  (*dev)->set_controller(ctl->get());
-  auto done = (*dev)->advance(solver, t0, frame);
+  EXPECT_EQ(dev->ctl->samples(), s.c.set.size());
+  auto done = dev->fluid->advance(solver, t0, frame);
   ASSERT_TRUE(done.has_value()) << done.error().message;
   EXPECT_GE(done->substeps, 2);  // so the swap falls inside the frame, after its first sub-step
-  EXPECT_EQ((*ctl)->samples(), slab->size());
+  EXPECT_EQ(dev->ctl->samples(), slab->size());
   std::vector<Vec3f> x, v;
-  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  ASSERT_TRUE(dev->fluid->get_state(x, v).ok());
   std::vector<Index> cpu_bound, gpu_bound, bound;
   const auto gx = by_id(start, x), cx = cpu_frame(morph, &cpu_bound), sx = cpu_frame(s.targets(), nullptr);
-  ASSERT_TRUE((*ctl)->get_bound(bound).ok());
+  ASSERT_TRUE(dev->ctl->get_bound(bound).ok());
   gpu_bound.assign(bound.size(), kInvalidIndex);
   for (std::size_t i = 0; i < bound.size(); ++i) gpu_bound[start.id[i]] = bound[i];
   const auto apart = sorted_apart(gx, cx, s.c.sp.spacing()), morphed = sorted_apart(cx, sx, s.c.sp.spacing());
@@ -484,7 +489,7 @@ TEST(GpuAdaptive, AMorphTracksTheCpuController) {
   EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
   EXPECT_GT(morphed[morphed.size() * 9 / 10], 10 * apart[apart.size() * 9 / 10]);
   EXPECT_GE(same, gpu_bound.size() - gpu_bound.size() / 50);
-  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+  for (const std::string& m : dev->ctx->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
 // Kinematic corrections (AdaptiveParams::kinematic): the corrections move the fluid without becoming velocity. One
@@ -493,16 +498,12 @@ TEST(GpuAdaptive, AMorphTracksTheCpuController) {
 TEST(GpuAdaptive, KinematicCorrectionsTrackTheCpuController) {
   Scene s;
   s.params.gather = true;
-  sim::ParticleSet p = s.column();
   sim::PbfSolver solver(s.c.sp, s.c.dom);
   solver.set_cluster_kernels(true);
   s.use(solver);
-  {
-    auto formed = control::AdaptiveController::create(s.targets(), s.ctx, s.params);
-    ASSERT_TRUE(formed.has_value()) << formed.error().message;
-    for (int f = 0; f < 40; ++f) ASSERT_TRUE(solver.advance(p, f / 60.0, 1.0 / 60.0, **formed).has_value());
-  }
-  const sim::ParticleSet start = p;
+  const std::optional<sim::ParticleSet> formed = cpu_state(s, solver, 40);
+  ASSERT_TRUE(formed.has_value());
+  const sim::ParticleSet& start = *formed;
   const double t0 = 40 / 60.0, frame = 1.0 / 60.0;
   control::AdaptiveParams kinematic = s.params;
   kinematic.kinematic = true;
@@ -513,19 +514,11 @@ TEST(GpuAdaptive, KinematicCorrectionsTrackTheCpuController) {
     v = by_id(q, q.velocity);
     return by_id(q, q.position);
   };
-  auto ctx = Context::create({.device = -1, .validation = true});
-  ASSERT_TRUE(ctx.has_value()) << ctx.error().message;
-  auto dev = PbfDevice::create(**ctx, start.size(),
-                               GridSpec::for_support(s.c.dom.min, s.c.dom.max, solver.lambda_consts().h).value());
+  auto dev = on_device(s, solver, start, s.targets(), kinematic);
   ASSERT_TRUE(dev.has_value()) << dev.error().message;
-  ASSERT_TRUE((*dev)->set_state(start.position, start.velocity).ok() && (*dev)->set_ids(start.id).ok());
-  auto ctl = AdaptiveDevice::create(**dev, s.targets(), s.ctx, kinematic);
-  ASSERT_TRUE(ctl.has_value()) << ctl.error().message;
-  ASSERT_TRUE((*ctl)->set_fluid_targets(start.target).ok());
-  (*dev)->set_controller(ctl->get());
-  ASSERT_TRUE((*dev)->advance(solver, t0, frame).has_value());
+  ASSERT_TRUE(dev->fluid->advance(solver, t0, frame).has_value());
   std::vector<Vec3f> x, v, cv, wv;
-  ASSERT_TRUE((*dev)->get_state(x, v).ok());
+  ASSERT_TRUE(dev->fluid->get_state(x, v).ok());
   const auto cx = cpu_frame(kinematic, cv);
   cpu_frame(s.params, wv);
   // Velocities in spacings per frame, so that they compare with the positions' spacings.
@@ -541,7 +534,7 @@ TEST(GpuAdaptive, KinematicCorrectionsTrackTheCpuController) {
   EXPECT_LT(apart[apart.size() * 9 / 10], 1e-2);
   EXPECT_LT(v_apart[v_apart.size() * 9 / 10], 1e-2);
   EXPECT_GT(v_kinematic[v_kinematic.size() * 9 / 10], 10 * v_apart[v_apart.size() * 9 / 10]);
-  for (const std::string& m : (*ctx)->messages()) ADD_FAILURE() << "validation: " << m;
+  for (const std::string& m : dev->ctx->messages()) ADD_FAILURE() << "validation: " << m;
 }
 
 }  // namespace
