@@ -7,6 +7,7 @@
 // answer is exact within a cell's size, which is all a steering direction needs.
 #include "core/types.h"
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -28,6 +29,7 @@ class NearestSeedField {
 
  private:
   Vec3i cell_of(const Vec3f& p) const;
+  void sweep(std::span<const Vec3f> points, const std::array<Vec3i, 13>& offsets, bool forward);
   Vec3f lo_{Vec3f::Zero()};
   float cell_ = 1.0f;
   Vec3i dims_{Vec3i::Ones()};
