@@ -226,6 +226,9 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
   vkGetPhysicalDeviceProperties(c->physical_, &props);
   c->timestamp_period_ = props.limits.timestampPeriod;
   c->max_groups_ = props.limits.maxComputeWorkGroupCount[0];
+  c->device_storage_buffers_ =
+      std::min(props.limits.maxPerStageDescriptorStorageBuffers, props.limits.maxDescriptorSetStorageBuffers);
+  c->max_storage_buffers_ = c->device_storage_buffers_;
   std::uint32_t nf = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(c->physical_, &nf, nullptr);
   std::vector<VkQueueFamilyProperties> families(nf);
@@ -237,6 +240,13 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
 VkResult Context::injected_allocation() {
   ++allocations_;
   return allocations_ == faults_.oom_at_allocation ? VK_ERROR_OUT_OF_DEVICE_MEMORY : VK_SUCCESS;
+}
+
+void Context::set_faults(const FaultPlan& faults) {
+  faults_ = faults;
+  max_storage_buffers_ = device_storage_buffers_;
+  if (faults.storage_buffers > 0)
+    max_storage_buffers_ = std::min(max_storage_buffers_, static_cast<std::uint32_t>(faults.storage_buffers));
 }
 
 VkResult Context::injected_shader(const char* name) const {
@@ -256,8 +266,10 @@ Result<FaultPlan> fault_plan_from_env() {
   if (kind == "device-lost" && count) plan.device_lost_at_submit = n;
   else if (kind == "out-of-memory" && count) plan.oom_at_allocation = n;
   else if (kind == "shader" && !arg.empty()) plan.bad_shader = arg;
+  else if (kind == "storage-buffers" && count) plan.storage_buffers = n;
   else
-    return param_error(fmt::format("FF_GPU_FAULT = '{}': expected device-lost:N, out-of-memory:N or shader:NAME", v));
+    return param_error(fmt::format(
+        "FF_GPU_FAULT = '{}': expected device-lost:N, out-of-memory:N, shader:NAME or storage-buffers:N", v));
   return plan;
 }
 

@@ -37,9 +37,10 @@ struct FaultPlan {
   long device_lost_at_submit = 0;  ///< the n-th queue submission (from 1) and every later one: VK_ERROR_DEVICE_LOST
   long oom_at_allocation = 0;      ///< the n-th buffer allocation (from 1): VK_ERROR_OUT_OF_DEVICE_MEMORY
   std::string bad_shader;          ///< loading this shader (e.g. "pbf_lambda"): VK_ERROR_INVALID_SHADER_NV
+  long storage_buffers = 0;        ///< the device allows this many storage buffers per shader (a smaller GPU's limit)
 };
-/// FF_GPU_FAULT = "device-lost:N", "out-of-memory:N" or "shader:NAME" (unset or empty: none); anything else is an
-/// error naming the variable.
+/// FF_GPU_FAULT = "device-lost:N", "out-of-memory:N", "shader:NAME" or "storage-buffers:N" (unset or empty: none);
+/// anything else is an error naming the variable.
 Result<FaultPlan> fault_plan_from_env();
 
 struct ContextOptions {
@@ -61,6 +62,9 @@ class Context {
   float timestamp_period_ns() const { return timestamp_period_; }
   /// The most workgroups one dispatch may have along x (maxComputeWorkGroupCount[0]; 65535 on some devices).
   std::uint32_t max_groups() const { return max_groups_; }
+  /// The most storage buffers one shader may bind: maxPerStageDescriptorStorageBuffers, or the descriptor set's
+  /// limit where smaller. Vulkan guarantees only 4; the control passes bind 14 (lavapipe and desktop GPUs allow far more).
+  std::uint32_t max_storage_buffers() const { return max_storage_buffers_; }
   /// Valid bits of the compute queue's timestamps (0: it has none).
   std::uint32_t timestamp_valid_bits() const { return timestamp_bits_; }
   /// A memory type among `type_bits` with all of `wanted`; −1 if none.
@@ -74,7 +78,7 @@ class Context {
   Status submit_and_wait(Record&& record);
   /// The injected result (FaultPlan) of the next buffer allocation, and of loading shader `name`: VK_SUCCESS unless
   /// a fault is planned there.
-  void set_faults(const FaultPlan& faults) { faults_ = faults; }  ///< none until set
+  void set_faults(const FaultPlan& faults);  ///< none until set
   VkResult injected_allocation();
   VkResult injected_shader(const char* name) const;
 
@@ -96,6 +100,7 @@ class Context {
   float timestamp_period_ = 0;
   std::uint32_t timestamp_bits_ = 0;
   std::uint32_t max_groups_ = 65535;
+  std::uint32_t max_storage_buffers_ = 4, device_storage_buffers_ = 4;
   std::vector<std::string> messages_;
   FaultPlan faults_;
   long submits_ = 0, allocations_ = 0;

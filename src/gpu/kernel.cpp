@@ -167,6 +167,12 @@ Result<Kernel> Kernel::create(Context& ctx, const char* name, std::span<const st
   if (loaded != VK_SUCCESS) return vk_fail(fmt::format("loading shader {}", name), loaded);
 
   const auto n = static_cast<std::uint32_t>(buffers.size());
+  // A device that allows fewer storage buffers per shader than a pass binds cannot run it: said in one line before
+  // any frame is made (Vulkan's own error for it is undefined behaviour, or a validation message at best).
+  if (n > ctx.max_storage_buffers())
+    return io_error(fmt::format("Vulkan: shader {} binds {} storage buffers and {} allows {} per shader "
+                                "(maxPerStageDescriptorStorageBuffers): run it with --device cpu",
+                                name, n, ctx.info().name, ctx.max_storage_buffers()));
   std::vector<VkDescriptorSetLayoutBinding> bindings(n);
   for (std::uint32_t b = 0; b < n; ++b)
     bindings[b] = {b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};

@@ -127,6 +127,16 @@ TEST(GpuRun, ADeviceLostOutOfMemoryOrABadShaderIsOneLineAndTheRunResumes) {
     one_line(r, "loading shader pbf_lambda failed (VK_ERROR_INVALID_SHADER_NV)");
     if (fs::exists(dir / "shader")) expect_no_temp_files(dir / "shader");
   }
+  {
+    // A GPU that allows fewer storage buffers per shader than the control passes bind (14; Vulkan guarantees 4): the
+    // pass that binds the most names itself, the count and the limit, before any frame is written.
+    const FaultEnv small("storage-buffers:8");
+    const auto r = run({"-q", "run", scene.string(), "-o", (dir / "small").string(), "--device", "gpu", "--no-mesh"});
+    one_line(r, "storage buffers and");
+    EXPECT_NE(r.err.find("allows 8 per shader"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "small" / "particles" / "frame_00001.ply"));
+    if (fs::exists(dir / "small")) expect_no_temp_files(dir / "small");
+  }
   const FaultEnv bad("device-lost:soon");
   const auto r = run({"-q", "run", scene.string(), "-o", (dir / "bad").string(), "--device", "gpu", "--no-mesh"});
   one_line(r, "FF_GPU_FAULT");
