@@ -94,7 +94,6 @@ void AdaptiveController::for_each_bond(std::size_t i, F&& f) const {
 
 void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet& p) {
   time_ = view.time;
-  update_strengths();
   // A target whose mesh is swapped at this time (morph A → B) takes its next sample set: its fluid stays, and
   // the new samples pull it into the new shape.
   // u_c over this sub-step (forward difference): moving targets carry their fluid along (AdaptiveParams::follow).
@@ -102,6 +101,8 @@ void AdaptiveController::begin_step(const sim::StepView& view, sim::ParticleSet&
     fill_.assign(samples_.size(), 0.0f);
     speed_scale_ = speed_scales(samples_.target, samples_.targets(), params_.speed_reference);
   }
+  // After the swap: which targets move is the new set's from its first sub-step on (as on the device).
+  update_strengths();
   const std::size_t n = p.size(), m = samples_.position.size();
   // Control–fluid pairs within H_c, one query per sub-step on the positions at its start (samples → fluid); the
   // fluid → sample bonds are its transpose, built below.
