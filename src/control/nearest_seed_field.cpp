@@ -68,9 +68,9 @@ void NearestSeedField::compute(std::span<const Vec3f> points, std::span<const In
 }
 
 // One raster sweep (forward: cells in raster order, backward: reversed): each cell takes the closest of its own seed
-// and those of `offsets`' neighbours, in that order (the first of equals stays). Cells off the grid's border skip the
-// bounds checks; the result is that of checking every neighbour one by one, bit for bit (the same comparisons in the
-// same order), at a fraction of the cost: the gather term recomputes this field every sub-step.
+// and those of `offsets`' neighbours, in that order (the first of equals stays). Cells not on the grid's border skip
+// the bounds checks; the result is that of checking every neighbour one by one, bit for bit (the same comparisons in
+// the same order), at a fraction of the cost: the gather term recomputes this field every sub-step.
 void NearestSeedField::sweep(std::span<const Vec3f> points, const std::array<Vec3i, 13>& offsets, bool forward) {
   const int nx = dims_.x(), ny = dims_.y(), nz = dims_.z();
   const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;

@@ -246,7 +246,8 @@ void Context::set_faults(const FaultPlan& faults) {
   faults_ = faults;
   max_storage_buffers_ = device_storage_buffers_;
   if (faults.storage_buffers > 0)
-    max_storage_buffers_ = std::min(max_storage_buffers_, static_cast<std::uint32_t>(faults.storage_buffers));
+    max_storage_buffers_ = static_cast<std::uint32_t>(
+        std::min<long>(faults.storage_buffers, static_cast<long>(max_storage_buffers_)));
 }
 
 VkResult Context::injected_shader(const char* name) const {

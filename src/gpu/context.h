@@ -30,7 +30,8 @@ struct DeviceInfo {
 Result<std::vector<DeviceInfo>> list_devices();
 
 /// Faults injected at the Vulkan calls, to test what the runs do when a real device fails (issue 45): the call
-/// returns an error code it can return, and everything above it takes its ordinary error path. Every GPU stepper
+/// returns an error code it can return, or the device reports a smaller limit than its own, and everything above it
+/// takes its ordinary error path. Every GPU stepper
 /// (pipeline/stepper.h: run, compare, serve) reads them from FF_GPU_FAULT (fault_plan_from_env) into its Context
 /// (set_faults); nothing is injected by default.
 struct FaultPlan {
@@ -77,7 +78,7 @@ class Context {
   template <class Record>
   Status submit_and_wait(Record&& record);
   /// The injected result (FaultPlan) of the next buffer allocation, and of loading shader `name`: VK_SUCCESS unless
-  /// a fault is planned there.
+  /// a fault is planned there. set_faults also lowers max_storage_buffers() to the plan's limit, if it has one.
   void set_faults(const FaultPlan& faults);  ///< none until set
   VkResult injected_allocation();
   VkResult injected_shader(const char* name) const;

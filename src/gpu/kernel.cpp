@@ -171,7 +171,7 @@ Result<Kernel> Kernel::create(Context& ctx, const char* name, std::span<const st
   // any frame is made (Vulkan's own error for it is undefined behaviour, or a validation message at best).
   if (n > ctx.max_storage_buffers())
     return io_error(fmt::format("Vulkan: shader {} binds {} storage buffers and {} allows {} per shader "
-                                "(maxPerStageDescriptorStorageBuffers): run it with --device cpu",
+                                "(its storage-buffer limit; the CPU runs it: --device cpu)",
                                 name, n, ctx.info().name, ctx.max_storage_buffers()));
   std::vector<VkDescriptorSetLayoutBinding> bindings(n);
   for (std::uint32_t b = 0; b < n; ++b)
