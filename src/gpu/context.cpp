@@ -228,7 +228,6 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
   c->max_groups_ = props.limits.maxComputeWorkGroupCount[0];
   c->device_storage_buffers_ =
       std::min(props.limits.maxPerStageDescriptorStorageBuffers, props.limits.maxDescriptorSetStorageBuffers);
-  c->max_storage_buffers_ = c->device_storage_buffers_;
   std::uint32_t nf = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(c->physical_, &nf, nullptr);
   std::vector<VkQueueFamilyProperties> families(nf);
@@ -240,14 +239,6 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
 VkResult Context::injected_allocation() {
   ++allocations_;
   return allocations_ == faults_.oom_at_allocation ? VK_ERROR_OUT_OF_DEVICE_MEMORY : VK_SUCCESS;
-}
-
-void Context::set_faults(const FaultPlan& faults) {
-  faults_ = faults;
-  max_storage_buffers_ = device_storage_buffers_;
-  if (faults.storage_buffers > 0)
-    max_storage_buffers_ = static_cast<std::uint32_t>(
-        std::min<long>(faults.storage_buffers, static_cast<long>(max_storage_buffers_)));
 }
 
 VkResult Context::injected_shader(const char* name) const {

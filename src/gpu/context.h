@@ -31,9 +31,8 @@ Result<std::vector<DeviceInfo>> list_devices();
 
 /// Faults injected at the Vulkan calls, to test what the runs do when a real device fails (issue 45): the call
 /// returns an error code it can return, or the device reports a smaller limit than its own, and everything above it
-/// takes its ordinary error path. Every GPU stepper
-/// (pipeline/stepper.h: run, compare, serve) reads them from FF_GPU_FAULT (fault_plan_from_env) into its Context
-/// (set_faults); nothing is injected by default.
+/// takes its ordinary error path. Every GPU stepper (pipeline/stepper.h: run, compare, serve) reads them from
+/// FF_GPU_FAULT (fault_plan_from_env) into its Context (set_faults); nothing is injected by default.
 struct FaultPlan {
   long device_lost_at_submit = 0;  ///< the n-th queue submission (from 1) and every later one: VK_ERROR_DEVICE_LOST
   long oom_at_allocation = 0;      ///< the n-th buffer allocation (from 1): VK_ERROR_OUT_OF_DEVICE_MEMORY
@@ -65,7 +64,11 @@ class Context {
   std::uint32_t max_groups() const { return max_groups_; }
   /// The most storage buffers one shader may bind: maxPerStageDescriptorStorageBuffers, or the descriptor set's
   /// limit where smaller. Vulkan guarantees only 4; the control passes bind 14 (lavapipe and desktop GPUs allow far more).
-  std::uint32_t max_storage_buffers() const { return max_storage_buffers_; }
+  std::uint32_t max_storage_buffers() const {
+    return faults_.storage_buffers > 0 && faults_.storage_buffers < long(device_storage_buffers_)
+               ? static_cast<std::uint32_t>(faults_.storage_buffers)
+               : device_storage_buffers_;
+  }
   /// Valid bits of the compute queue's timestamps (0: it has none).
   std::uint32_t timestamp_valid_bits() const { return timestamp_bits_; }
   /// A memory type among `type_bits` with all of `wanted`; −1 if none.
@@ -78,8 +81,8 @@ class Context {
   template <class Record>
   Status submit_and_wait(Record&& record);
   /// The injected result (FaultPlan) of the next buffer allocation, and of loading shader `name`: VK_SUCCESS unless
-  /// a fault is planned there. set_faults also lowers max_storage_buffers() to the plan's limit, if it has one.
-  void set_faults(const FaultPlan& faults);  ///< none until set
+  /// a fault is planned there. A plan's storage-buffer limit also lowers max_storage_buffers().
+  void set_faults(const FaultPlan& faults) { faults_ = faults; }  ///< none until set
   VkResult injected_allocation();
   VkResult injected_shader(const char* name) const;
 
@@ -101,7 +104,7 @@ class Context {
   float timestamp_period_ = 0;
   std::uint32_t timestamp_bits_ = 0;
   std::uint32_t max_groups_ = 65535;
-  std::uint32_t max_storage_buffers_ = 4, device_storage_buffers_ = 4;
+  std::uint32_t device_storage_buffers_ = 4;
   std::vector<std::string> messages_;
   FaultPlan faults_;
   long submits_ = 0, allocations_ = 0;
