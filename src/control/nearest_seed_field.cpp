@@ -6,6 +6,15 @@
 
 namespace ff::control {
 
+namespace {
+
+// The centre of cell (i, j, k) of a grid whose corner is `lo` (compute's seeding and sweep's comparisons must agree).
+Vec3f cell_centre(const Vec3f& lo, float cell, int i, int j, int k) {
+  return Vec3f(lo.x() + cell * (float(i) + 0.5f), lo.y() + cell * (float(j) + 0.5f), lo.z() + cell * (float(k) + 0.5f));
+}
+
+}  // namespace
+
 void NearestSeedField::reset(const Vec3f& lo, const Vec3f& hi, float cell, std::size_t max_cells) {
   lo_ = lo;
   const Vec3f ext = (hi - lo).cwiseMax(Vec3f::Constant(1e-6f));
@@ -41,14 +50,11 @@ void NearestSeedField::compute(std::span<const Vec3f> points, std::span<const In
   if (empty_) return;
   const int nx = dims_.x(), ny = dims_.y();
   auto at = [&](int i, int j, int k) { return static_cast<std::size_t>(i) + std::size_t(nx) * (j + std::size_t(ny) * k); };
-  auto centre = [&](int i, int j, int k) {
-    return Vec3f(lo_.x() + cell_ * (float(i) + 0.5f), lo_.y() + cell_ * (float(j) + 0.5f), lo_.z() + cell_ * (float(k) + 0.5f));
-  };
   for (Index s : seeds) {  // in order: ties keep the first seed, so the field is deterministic
     const Vec3f& x = points[s];
     const Vec3i c = cell_of(x);
     const std::size_t k = at(c.x(), c.y(), c.z());
-    const float d2 = (x - centre(c.x(), c.y(), c.z())).squaredNorm();
+    const float d2 = (x - cell_centre(lo_, cell_, c.x(), c.y(), c.z())).squaredNorm();
     if (d2 < dist2_[k]) dist2_[k] = d2, seed_[k] = s;
   }
   // Forward: the 13 neighbours earlier in raster order; backward: the 13 later ones, each in the order the loops
@@ -85,8 +91,7 @@ void NearestSeedField::sweep(std::span<const Vec3f> points, const std::array<Vec
       for (int ii = 0; ii < nx; ++ii) {
         const int i = forward ? ii : nx - 1 - ii;
         const std::ptrdiff_t here = i + sy * j + sz * k;
-        const Vec3f centre(lo_.x() + cell_ * (float(i) + 0.5f), lo_.y() + cell_ * (float(j) + 0.5f),
-                           lo_.z() + cell_ * (float(k) + 0.5f));
+        const Vec3f centre = cell_centre(lo_, cell_, i, j, k);
         const bool inner = inner_jk && i > 0 && i < nx - 1;
         for (std::size_t o = 0; o < offsets.size(); ++o) {
           if (!inner) {
