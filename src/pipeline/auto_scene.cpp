@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace ff::pipeline {
@@ -225,7 +226,40 @@ Status size_target_fluid(const scene::Scene& s, std::size_t k, TargetGeometry& t
   return {};
 }
 
-// A fluid column over the middle of each target's footprint holding the target's volume, a spacing above it.
+// The highest point of `mesh` over the rectangle [lo, hi] of the xz plane: each triangle clipped to the rectangle
+// (Sutherland–Hodgman against its four sides), its highest clipped vertex. −∞ when no triangle lies over it.
+float highest_over(const io::TriangleMesh& mesh, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi) {
+  float top = -std::numeric_limits<float>::infinity();
+  std::vector<Vec3f> poly, next;
+  for (const auto& tri : mesh.triangles) {
+    poly = {mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]};
+    // Sides: x ≥ lo.x, x ≤ hi.x, z ≥ lo.y, z ≤ hi.y; inside(p) ≥ 0.
+    for (int side = 0; side < 4 && !poly.empty(); ++side) {
+      const int axis = side < 2 ? 0 : 2;
+      const float bound = side == 0 ? lo.x() : side == 1 ? hi.x() : side == 2 ? lo.y() : hi.y();
+      const float sign = side % 2 == 0 ? 1.0f : -1.0f;
+      const auto inside = [&](const Vec3f& p) { return sign * (p[axis] - bound); };
+      next.clear();
+      for (std::size_t i = 0; i < poly.size(); ++i) {
+        const Vec3f& a = poly[i];
+        const Vec3f& b = poly[(i + 1) % poly.size()];
+        const float fa = inside(a), fb = inside(b);
+        if (fa >= 0.0f) next.push_back(a);
+        if ((fa >= 0.0f) != (fb >= 0.0f)) next.push_back(a + (fa / (fa - fb)) * (b - a));
+      }
+      poly.swap(next);
+    }
+    for (const Vec3f& p : poly) top = std::max(top, p.y());
+  }
+  return top;
+}
+
+// A fluid column over the middle of each target's footprint holding the target's volume, a spacing above the
+// target's highest point under that footprint. For most shapes that is the top of its box; a container's fluid (an
+// open box, a bowl) starts inside it just above its floor: poured from above its rim, the open box's fluid struck
+// the floor at ~4 m/s, ran up the walls and was held there, over-full toward the rim, and the floor kept a hole 20
+// spacings across whatever the fluid's share (bench/RESULTS.md, "Detail at scale, ninth part"). A footprint over
+// none of the target keeps the top of its box.
 // Returns the particles each column is to hold (its volume in cells of d³), for fit_columns.
 std::vector<std::size_t> place_fluid_columns(scene::Scene& s, const std::vector<TargetGeometry>& targets, float d) {
   std::vector<std::size_t> counts;
@@ -240,10 +274,16 @@ std::vector<std::size_t> place_fluid_columns(scene::Scene& s, const std::vector<
       fx = fz = a;
       h = 2.0f * a;
     }
+    const float under = highest_over(t.mesh, Eigen::Vector2f(mid.x() - 0.5f * fx, mid.z() - 0.5f * fz),
+                                     Eigen::Vector2f(mid.x() + 0.5f * fx, mid.z() + 0.5f * fz));
+    const float base = std::isfinite(under) ? std::min(under, t.box.max.y()) : t.box.max.y();
     sim::FluidSource src;
     src.shape = sim::FluidSource::Shape::Box;
-    src.min = Vec3f(mid.x() - 0.5f * fx, t.box.max.y() + d, mid.z() - 0.5f * fz);
-    src.max = Vec3f(mid.x() + 0.5f * fx, t.box.max.y() + d + h, mid.z() + 0.5f * fz);
+    src.min = Vec3f(mid.x() - 0.5f * fx, base + d, mid.z() - 0.5f * fz);
+    src.max = Vec3f(mid.x() + 0.5f * fx, base + d + h, mid.z() + 0.5f * fz);
+    if (base < t.box.max.y())
+      spdlog::info("fluid column {}: starts {:.3g} m below the top of its target, {:.3g} m over its highest point "
+                   "under the column", counts.size(), t.box.max.y() - base, d);
     s.fluid.push_back(src);
     counts.push_back(static_cast<std::size_t>(std::llround(t.volume / (double(d) * d * d))));
   }

@@ -4,8 +4,9 @@
 //                     kFluidCellShare of as many particles (METHOD §0: d_c = d); when the scene names no count,
 //                     more where a target's thinnest wall would be under kWallSpacings spacings across (up to
 //                     sampling.max_auto_count);
-//   fluid             one column per target, of its fluid's volume, standing on top of the target so it
-//                     pours down through the target's control band (METHOD §a.10: control only reaches H_c);
+//   fluid             one column per target, of its fluid's volume, over the middle of its footprint, a spacing
+//                     over the target's highest point under it (its top; a container's floor), so it pours down
+//                     through the target's control band (METHOD §a.10: control only reaches H_c);
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
 //                     target, so the formed shape is held by the control, not by the floor.
 // Mesh units are metres whatever the model's size. Given keys are never overridden.
