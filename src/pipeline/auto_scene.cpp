@@ -254,16 +254,31 @@ float highest_over(const io::TriangleMesh& mesh, const Eigen::Vector2f& lo, cons
   return top;
 }
 
-// A fluid column over the middle of each target's footprint holding the target's volume, a spacing above the
-// target's highest point under that footprint. For most shapes that is the top of its box; a container's fluid (an
-// open box, a bowl) starts inside it just above its floor: poured from above its rim, the open box's fluid struck
+// Where target k's column starts: a spacing over the highest point of any target under its footprint [lo, hi], at most
+// over the top of k's box. For most shapes that is the top of the box; a container whose footprint's middle looks down
+// on its floor (an open box, a bowl) gets its fluid inside it: poured from above its rim, the open box's fluid struck
 // the floor at ~4 m/s, ran up the walls and was held there, over-full toward the rim, and the floor kept a hole 20
-// spacings across whatever the fluid's share (bench/RESULTS.md, "Detail at scale, ninth part"). A footprint over
-// none of the target keeps the top of its box.
-// Returns the particles each column is to hold (its volume in cells of d³), for fit_columns.
+// spacings across whatever the fluid's share (bench/RESULTS.md, "Detail at scale, ninth part"). Every target counts,
+// so a column never starts inside another target it used to fall onto. A moving or skinned target is placed by its
+// bind pose, which need not be its pose at the start, and a footprint over none of the targets has nothing to stand
+// on: both keep the top of the box.
+float column_base(const scene::Scene& s, const std::vector<TargetGeometry>& targets, std::size_t k,
+                  const Eigen::Vector2f& lo, const Eigen::Vector2f& hi) {
+  const TargetGeometry& t = targets[k];
+  const scene::TargetSpec& spec = s.targets[k];
+  if (t.skin || !spec.keyframes.empty() || !spec.swaps.empty()) return t.box.max.y();
+  float under = -std::numeric_limits<float>::infinity();
+  for (const auto& other : targets) under = std::max(under, highest_over(other.mesh, lo, hi));
+  return std::isfinite(under) ? std::min(under, t.box.max.y()) : t.box.max.y();
+}
+
+// A fluid column over the middle of each target's footprint holding the target's volume, a spacing over where
+// column_base says it stands. Returns the particles each column is to hold (its volume in cells of d³), for
+// fit_columns.
 std::vector<std::size_t> place_fluid_columns(scene::Scene& s, const std::vector<TargetGeometry>& targets, float d) {
   std::vector<std::size_t> counts;
-  for (const auto& t : targets) {
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    const TargetGeometry& t = targets[k];
     if (!(t.volume > 0.0)) continue;
     const Vec3f ext = t.box.max - t.box.min, mid = 0.5f * (t.box.min + t.box.max);
     float fx = std::max(0.7f * ext.x(), 4.0f * d), fz = std::max(0.7f * ext.z(), 4.0f * d);
@@ -274,16 +289,15 @@ std::vector<std::size_t> place_fluid_columns(scene::Scene& s, const std::vector<
       fx = fz = a;
       h = 2.0f * a;
     }
-    const float under = highest_over(t.mesh, Eigen::Vector2f(mid.x() - 0.5f * fx, mid.z() - 0.5f * fz),
-                                     Eigen::Vector2f(mid.x() + 0.5f * fx, mid.z() + 0.5f * fz));
-    const float base = std::isfinite(under) ? std::min(under, t.box.max.y()) : t.box.max.y();
+    const float base = column_base(s, targets, k, Eigen::Vector2f(mid.x() - 0.5f * fx, mid.z() - 0.5f * fz),
+                                   Eigen::Vector2f(mid.x() + 0.5f * fx, mid.z() + 0.5f * fz));
     sim::FluidSource src;
     src.shape = sim::FluidSource::Shape::Box;
     src.min = Vec3f(mid.x() - 0.5f * fx, base + d, mid.z() - 0.5f * fz);
     src.max = Vec3f(mid.x() + 0.5f * fx, base + d + h, mid.z() + 0.5f * fz);
     if (base < t.box.max.y())
-      spdlog::info("fluid column {}: starts {:.3g} m below the top of its target, {:.3g} m over its highest point "
-                   "under the column", counts.size(), t.box.max.y() - base, d);
+      spdlog::info("target {}: its fluid starts inside it, {:.3g} m below its top (over the highest point under the "
+                   "column)", k, t.box.max.y() - base);
     s.fluid.push_back(src);
     counts.push_back(static_cast<std::size_t>(std::llround(t.volume / (double(d) * d * d))));
   }
@@ -299,12 +313,17 @@ void fit_columns(scene::Scene& s, const std::vector<std::size_t>& counts, float 
   std::vector<sim::FluidSource> fitted;
   for (std::size_t c = 0; c < s.fluid.size(); ++c) {
     sim::FluidSource column = s.fluid[c];
-    for (const auto& f : fitted) {
-      const bool overlaps = f.min.x() < column.max.x() && column.min.x() < f.max.x() && f.min.z() < column.max.z() &&
-                            column.min.z() < f.max.z() && f.min.y() < column.max.y() && column.min.y() < f.max.y();
-      if (overlaps) {
-        const float lift = f.max.y() + d - column.min.y();
-        column.min.y() += lift, column.max.y() += lift;
+    // Until it overlaps none: a lift over one box can reach one the pass has already checked.
+    for (bool lifted = true; lifted;) {
+      lifted = false;
+      for (const auto& f : fitted) {
+        const bool overlaps = f.min.x() < column.max.x() && column.min.x() < f.max.x() && f.min.z() < column.max.z() &&
+                              column.min.z() < f.max.z() && f.min.y() < column.max.y() && column.min.y() < f.max.y();
+        if (overlaps) {
+          const float lift = f.max.y() + d - column.min.y();
+          column.min.y() += lift, column.max.y() += lift;
+          lifted = true;
+        }
       }
     }
     if (s.auto_domain) s.domain.max.y() = std::max(s.domain.max.y(), column.max.y() + 2.0f * hc);

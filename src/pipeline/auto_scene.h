@@ -5,7 +5,7 @@
 //                     more where a target's thinnest wall would be under kWallSpacings spacings across (up to
 //                     sampling.max_auto_count);
 //   fluid             one column per target, of its fluid's volume, over the middle of its footprint, a spacing
-//                     over the target's highest point under it (its top; a container's floor), so it pours down
+//                     over the targets' highest point under it (its top; a container's floor), so it pours down
 //                     through the target's control band (METHOD §a.10: control only reaches H_c);
 //   domain            the targets and columns with a margin; the floor one control support below the lowest
 //                     target, so the formed shape is held by the control, not by the floor.

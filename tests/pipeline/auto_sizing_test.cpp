@@ -132,8 +132,9 @@ TEST_F(AutoSizing, AContainersFluidStartsInsideItOverItsFloor) {
     Vec3f lo = Vec3f::Constant(1e9f), hi = Vec3f::Constant(-1e9f);
     for (std::size_t i = 0; i < fluid.size(); ++i)
       lo = lo.cwiseMin(fluid.position[i]), hi = hi.cwiseMax(fluid.position[i]);
-    if (std::string(mesh) == "ball.obj") {
-      EXPECT_GT(lo.y(), c.targets[0].box.max.y()) << "the ball's column starts over its top";
+    if (std::string(mesh) == "ball.obj") {  // a spacing over its top, on the lattice
+      EXPECT_GT(lo.y(), c.targets[0].box.max.y() + 0.5f * d);
+      EXPECT_LT(lo.y(), c.targets[0].box.max.y() + 2.5f * d);
       continue;
     }
     // Within the box's cavity: over its floor by about a spacing, under its rim, between its walls.
@@ -146,6 +147,17 @@ TEST_F(AutoSizing, AContainersFluidStartsInsideItOverItsFloor) {
     EXPECT_GT(lo.z(), -0.4f + wall);
     EXPECT_LT(hi.z(), 0.4f - wall);
   }
+  // A second target standing in the box: neither column starts inside it (the box's stands on it, not on the floor).
+  test::write_obj(dir_ / "small_ball.obj", test::uv_sphere(0.15f, 24));
+  const auto c = complete(dir_, R"({"targets": [{"mesh": "open_box.obj"}, {"mesh": "small_ball.obj",
+      "translate": [0, -0.13, 0]}], "sampling": {"auto_count": 3000}})");
+  ASSERT_EQ(c.targets.size(), 2u);
+  sim::ParticleSet fluid;
+  ASSERT_TRUE(sim::fill_sources(c.scene.fluid, c.scene.domain, c.scene.solver.particle_radius, fluid).ok());
+  float lowest = 1e9f;
+  for (std::size_t i = 0; i < fluid.size(); ++i) lowest = std::min(lowest, fluid.position[i].y());
+  EXPECT_GT(lowest, c.targets[1].box.max.y()) << "a column starts inside the ball";
+  EXPECT_LT(lowest, 0.35f) << "the fluid starts in the box, not over its rim";
 }
 
 TEST_F(AutoSizing, TheBudgetHoldsTheCountBackAndTheLineSaysWhatWouldResolveIt) {
