@@ -16,7 +16,8 @@ namespace fs = std::filesystem;
 namespace {
 
 // Bumped whenever sampling changes what it makes for the same inputs, so stale caches are not reused.
-constexpr std::uint64_t kSamplingVersion = 2;  // 2: MeshField keeps the inner faces of parts welded where they touch
+// 2: MeshField keeps the inner faces of parts welded where they touch; 3: the relaxation's momentum (30 steps).
+constexpr std::uint64_t kSamplingVersion = 3;
 
 template <class T>
 void put(std::vector<std::uint8_t>& b, const T& v) {
