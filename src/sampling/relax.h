@@ -27,9 +27,9 @@ struct RelaxParams {
                                  ///< keeps edges and corners covered within 0.9 d)
   float momentum = 0.75f;        ///< share of a sample's last move added to its next (0: plain gradient descent;
                                  ///< 30 steps at 0.75 spread samples more evenly than 100 at 0: bench/RESULTS.md)
-  float max_move = 0.12f;        ///< largest displacement of one sample per step, in d (0.2 moved as evenly, but
-                                 ///< with momentum many samples run at the cap and the Verlet list is rebuilt
-                                 ///< every other step)
+  float max_move = 0.1f;         ///< largest displacement of one sample per step, in d (0.2 spread them as evenly,
+                                 ///< but with momentum many samples run at the cap and the Verlet list was rebuilt
+                                 ///< every other step; bench/RESULTS.md)
 };
 
 /// Relaxes `x` in place (the order of the samples changes: they are kept in cell order).
