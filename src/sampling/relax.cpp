@@ -239,8 +239,8 @@ void relax_samples(std::vector<Vec3f>& x, const SdfGrid& sdf, const RelaxParams&
   const std::size_t n = x.size();
   const auto ni = static_cast<std::int64_t>(n);
   const float d = params.spacing, rc = params.reach * d, depth = params.boundary_depth * d;
-  // Verlet lists: neighbours within r_c + skin are found only when some sample may have moved half the
-  // skin since the last search (a step moves a sample by at most max_move·d, projection included).
+  // Verlet lists: neighbours within r_c + skin are found again only when some sample has moved half the skin
+  // since the last search (measured: a step's move is capped at max_move·d, but the projection can add to it).
   const float skin = 0.5f * d;
   core::NeighborGrid grid(rc + skin);
   core::NeighborList nb;

@@ -1,6 +1,6 @@
 #pragma once
 // The signed distance of a target mesh sampled on a regular grid (docs/ARCHITECTURE.md), so that the
-// blue-noise relaxation (100+ steps over up to 1M samples) reads distance, outward normal and closest surface
+// blue-noise relaxation (30 steps over up to 1M samples) reads distance, outward normal and closest surface
 // point by trilinear interpolation in O(1) instead of a BVH query each.
 //
 // Build. Unsigned distance: exact within kBandCells (4) spacings of the surface, where every triangle is
