@@ -1,13 +1,12 @@
 #pragma once
-// Blue-noise relaxation of volume samples. METHOD.md §c.3 describes SPlisHSPlasH's SPH relaxations
-// (Jiang et al. 2015, Kugelstadt et al. 2021); what is used is Jiang's idea of a repulsive pressure in its
-// simplest form: a soft pair potential (1 − r/r_c)³ of range r_c = 1.75 d minimised by annealed gradient
-// descent with heavy-ball momentum (Polyak 1964), plus a projection of every sample shallower than
-// `boundary_depth`·d back to that depth along the SDF gradient. With N = V/d³ the set stays under slight pressure, so it spreads evenly up to the surface layer and
-// voids close. A half-strength repulsion by each sample's mirror image across the surface keeps the surface
-// layer about d/2 deep, so thin walls stay covered. The two position-based forms that lost (a PBF density
-// projection, hard minimum-distance constraints) and the figures are in bench/RESULTS.md, "Sampling: the
-// relaxation".
+// Blue-noise relaxation of volume samples. METHOD.md §c.3 describes SPlisHSPlasH's SPH relaxations (Jiang et al. 2015,
+// Kugelstadt et al. 2021); what is used is Jiang's idea of a repulsive pressure in its simplest form: a soft pair
+// potential (1 − r/r_c)³ of range r_c = 1.75 d minimised by annealed gradient descent with heavy-ball momentum (Polyak
+// 1964), plus a projection of every sample shallower than `boundary_depth`·d back to that depth along the SDF gradient.
+// With N = V/d³ the set stays under slight pressure, so it spreads evenly up to the surface layer and voids close. A
+// half-strength repulsion by each sample's mirror image across the surface keeps the surface layer about d/2 deep, so
+// thin walls stay covered. The two position-based forms that lost (a PBF density projection, hard minimum-distance
+// constraints) and the figures are in bench/RESULTS.md, "Sampling: the relaxation".
 #include "core/progress.h"
 #include "core/types.h"
 #include "sampling/sdf_grid.h"
